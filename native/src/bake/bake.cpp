@@ -1,0 +1,367 @@
+#include "bake/bake.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <regex>
+#include <set>
+
+#include "bake/level_stats.h"
+#include "error.h"
+#include "io/atomic_file.h"
+#include "io/color_decode.h"
+#include "io/json_writer.h"
+#include "ndf/spherical_em.h"
+
+namespace ndfbake {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kFileFormatVersion = 1;
+
+double seconds_since(std::chrono::steady_clock::time_point start)
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void check_progress(const StageProgress& progress, const char* stage, double fraction)
+{
+    if (progress && !progress(stage, fraction)) throw Error(Status::cancelled, "cancelled");
+}
+
+// Lobe texture texel: R = α, GBA = α·r with |r| the resultant whose Banerjee κ is the lobe's.
+void encode_lobe(const VmfLobe& lobe, float* rgba)
+{
+    if (!(lobe.alpha > 0.0f)) {
+        rgba[0] = rgba[1] = rgba[2] = rgba[3] = 0.0f;
+        return;
+    }
+    const float r = float(resultant_from_kappa(lobe.kappa));
+    rgba[0] = lobe.alpha;
+    rgba[1] = lobe.alpha * r * lobe.mu.x;
+    rgba[2] = lobe.alpha * r * lobe.mu.y;
+    rgba[3] = lobe.alpha * r * lobe.mu.z;
+}
+
+std::vector<float> lobe_texture(const LobePyramid& pyramid, int level, int slot)
+{
+    const LevelSize size = pyramid.size(level);
+    std::vector<float> rgba(size_t(size.width) * size_t(size.height) * 4);
+    std::vector<VmfLobe> lobes(static_cast<size_t>(pyramid.slots));
+    for (int y = 0; y < size.height; ++y)
+        for (int x = 0; x < size.width; ++x) {
+            pyramid.texel(level, x, y, lobes);
+            encode_lobe(lobes[size_t(slot)], &rgba[(size_t(y) * size_t(size.width) + size_t(x)) * 4]);
+        }
+    return rgba;
+}
+
+// Per-lobe colour (eq. 22): y_j = Σ ⟨z_ij⟩ w_i y_i / Σ ⟨z_ij⟩ w_i over the texel's fine texels;
+// stored as RGB = α_j y_j, A = α_j so that it filters linearly like the lobe textures.
+std::vector<std::vector<float>> color_textures(const LobePyramid& pyramid, const ColorImage& color, int level)
+{
+    const LevelSize size = pyramid.size(level);
+    const int slots = pyramid.slots;
+    std::vector<std::vector<float>> textures(size_t(slots),
+                                             std::vector<float>(size_t(size.width) * size_t(size.height) * 4, 0.0f));
+    // Colours travel with the normals: gather the footprint of a colour "map" alongside.
+    NormalMap rgb;
+    rgb.width = color.width;
+    rgb.height = color.height;
+    const size_t n = size_t(color.width) * size_t(color.height);
+    rgb.normals.resize(n);
+    for (size_t p = 0; p < n; ++p) rgb.normals[p] = {color.rgb[p * 3], color.rgb[p * 3 + 1], color.rgb[p * 3 + 2]};
+
+    std::vector<WeightedNormal> samples, colors;
+    std::vector<float> z;
+    std::vector<VmfLobe> lobes(static_cast<size_t>(slots));
+    for (int y = 0; y < size.height; ++y)
+        for (int x = 0; x < size.width; ++x) {
+            gather_footprint(pyramid.source, level, x, y, pyramid.wrap, samples);
+            gather_footprint(rgb, level, x, y, pyramid.wrap, colors);
+            pyramid.texel(level, x, y, lobes);
+            vmf_responsibilities(samples, lobes, z);
+            for (int j = 0; j < slots; ++j) {
+                if (!(lobes[size_t(j)].alpha > 0.0f)) continue;
+                Vec3d sum;
+                double weight = 0.0;
+                for (size_t i = 0; i < samples.size(); ++i) {
+                    const double w = double(samples[i].weight) * z[i * size_t(slots) + size_t(j)];
+                    sum.add(colors[i].n, w);
+                    weight += w;
+                }
+                float* out = &textures[size_t(j)][(size_t(y) * size_t(size.width) + size_t(x)) * 4];
+                const float alpha = lobes[size_t(j)].alpha;
+                const Vec3 mean = weight > 0.0 ? sum.to_float() / float(weight) : Vec3{};
+                out[0] = alpha * mean.x;
+                out[1] = alpha * mean.y;
+                out[2] = alpha * mean.z;
+                out[3] = alpha;
+            }
+        }
+    return textures;
+}
+
+std::string hex64(uint64_t value)
+{
+    char buffer[17];
+    std::snprintf(buffer, sizeof buffer, "%016llx", static_cast<unsigned long long>(value));
+    return buffer;
+}
+
+std::vector<ExrAttribute> file_attributes(const LobePyramid& pyramid, const DecodeResult& decoded,
+                                          const PyramidSettings& settings, const WriteSettings& write,
+                                          int level, int lobe, float level_error, const char* content)
+{
+    return {
+        {"ndfbake:format_version", kFileFormatVersion},
+        {"ndfbake:content", std::string(content)},
+        {"ndfbake:level", level},
+        {"ndfbake:lobe", lobe},
+        {"ndfbake:lobe_slots", pyramid.slots},
+        {"ndfbake:level_count", pyramid.level_count()},
+        {"ndfbake:source", write.source_name},
+        {"ndfbake:source_hash", hex64(decoded.source_hash)},
+        {"ndfbake:source_width", pyramid.source.width},
+        {"ndfbake:source_height", pyramid.source.height},
+        {"ndfbake:convention", std::string("opengl tangent space, +Z out, +Y up V")},
+        {"ndfbake:wrap", std::string(settings.wrap == WrapMode::wrap ? "repeat" : "clamp")},
+        {"ndfbake:brdf", settings.brdf.to_string()},
+        {"ndfbake:tolerance", settings.fit.tolerance},
+        {"ndfbake:aligned", settings.align ? 1 : 0},
+        {"ndfbake:kappa_max", kKappaMax},
+        {"ndfbake:fit_error", level_error},
+        {"ndfbake:version", std::string(NDFBAKE_VERSION_STRING)},
+    };
+}
+
+void write_summary(JsonWriter& json, const char* key, const ErrorSummary& summary)
+{
+    json.begin_object(key).value("mean", summary.mean).value("p95", summary.p95).end_object();
+}
+
+std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded, const PyramidSettings& settings,
+                        const WriteSettings& write, const std::vector<LevelStats>& stats,
+                        const BakeTimings& timings, const std::vector<std::string>& files)
+{
+    JsonWriter json;
+    json.begin_object();
+    json.value("format_version", kFileFormatVersion).value("ndfbake_version", NDFBAKE_VERSION_STRING);
+    json.begin_object("input")
+        .value("source", write.source_name)
+        .value("width", pyramid.source.width)
+        .value("height", pyramid.source.height)
+        .value("format", decoded.format)
+        .value("bits_per_channel", decoded.bits_per_channel)
+        .value("channels", decoded.channels)
+        .value("srgb_tagged", decoded.srgb_tagged)
+        .value("signed_encoding", decoded.signed_encoding)
+        .value("source_hash", hex64(decoded.source_hash));
+    json.begin_array("assumptions");
+    for (const std::string& a : decoded.assumptions) json.value(nullptr, a);
+    json.end_array().end_object();
+
+    json.begin_object("settings")
+        .value("max_lobes", settings.fit.max_lobes)
+        .value("tolerance", settings.fit.tolerance)
+        .value("brdf", settings.brdf.to_string())
+        .value("wrap", settings.wrap == WrapMode::wrap ? "repeat" : "clamp")
+        .value("aligned", settings.align)
+        .value("alignment_strength", settings.alignment_strength)
+        .value("precision", write.precision == PixelPrecision::half ? "half" : "float")
+        .value("per_lobe_color", !write.color_path.empty())
+        .end_object();
+
+    json.begin_object("repairs")
+        .value("non_finite", decoded.repairs.non_finite)
+        .value("zero_length", decoded.repairs.zero_length)
+        .value("renormalized", decoded.repairs.renormalized)
+        .value("below_horizon", decoded.repairs.below_horizon)
+        .value("rule", "non-finite or shorter than 0.01: +Z; z < 0: z = -z; then normalized")
+        .end_object();
+
+    json.begin_object("error_measure")
+        .value("what", "relative L2 distance to the exact effective BRDF (Han 2007 eq. 4) over a fixed "
+                       "Fibonacci set of hemisphere directions")
+        .value("directions", error_direction_count(settings.brdf))
+        .value("texels_per_level", kReportTexelsPerLevel)
+        .value("fine_normals_per_texel", kReportSampleCap)
+        .end_object();
+
+    json.begin_array("levels");
+    for (const LevelStats& s : stats) {
+        json.begin_object()
+            .value("level", s.level)
+            .value("width", s.size.width)
+            .value("height", s.size.height);
+        json.begin_array("lobe_histogram");
+        for (int k = 0; k <= pyramid.slots; ++k) json.value(nullptr, s.lobe_histogram[size_t(k)]);
+        json.end_array();
+        json.value("measured_texels", s.measured_texels);
+        write_summary(json, "error", s.fit);
+        write_summary(json, "error_without_alignment", s.independent_fit);
+        json.value("alignment_cost", double(s.fit.mean) - double(s.independent_fit.mean));
+        write_summary(json, "error_single_vmf", s.single_vmf);
+        write_summary(json, "error_toksvig", s.toksvig);
+        json.end_object();
+    }
+    json.end_array();
+
+    json.begin_object("timings_seconds")
+        .value("decode", timings.decode)
+        .value("fit", timings.fit)
+        .value("measure", timings.measure)
+        .value("write", timings.write)
+        .end_object();
+    json.begin_array("files");
+    for (const std::string& f : files) json.value(nullptr, fs::path(f).filename().string());
+    json.value(nullptr, "report.json");
+    json.end_array();
+    json.end_object();
+    return json.str();
+}
+
+bool is_bake_file(const std::string& name)
+{
+    static const std::regex pattern(R"(level\d+_(lobe|color)\d+\.exr)");
+    return std::regex_match(name, pattern);
+}
+
+fs::path make_staging_dir(const fs::path& out_dir)
+{
+    static std::atomic<unsigned> counter{0};
+    const fs::path staging = out_dir / (".ndfbake-staging-" + std::to_string(::getpid()) + "-" +
+                                        std::to_string(counter.fetch_add(1)));
+    std::error_code ec;
+    fs::create_directory(staging, ec);
+    if (ec) throw Error(Status::io_error, "cannot create '" + staging.string() + "': " + ec.message());
+    return staging;
+}
+
+}  // namespace
+
+std::string lobe_file_name(int level, int lobe)
+{
+    char buffer[48];
+    std::snprintf(buffer, sizeof buffer, "level%02d_lobe%d.exr", level, lobe);
+    return buffer;
+}
+
+std::string color_file_name(int level, int lobe)
+{
+    char buffer[48];
+    std::snprintf(buffer, sizeof buffer, "level%02d_color%d.exr", level, lobe);
+    return buffer;
+}
+
+BakeOutcome write_pyramid(const LobePyramid& pyramid, const DecodeResult& decoded, const std::string& out_dir,
+                          const PyramidSettings& settings, const WriteSettings& write, BakeTimings timings,
+                          const StageProgress& progress)
+{
+    ensure_writable_directory(out_dir);
+
+    ColorImage color;
+    if (!write.color_path.empty()) {
+        color = decode_color_image(write.color_path);
+        if (color.width != pyramid.source.width || color.height != pyramid.source.height)
+            throw Error(Status::invalid_argument,
+                        "colour image '" + write.color_path + "' is " + std::to_string(color.width) + "x" +
+                            std::to_string(color.height) + ", the normal map is " +
+                            std::to_string(pyramid.source.width) + "x" + std::to_string(pyramid.source.height));
+    }
+
+    auto start = std::chrono::steady_clock::now();
+    std::vector<LevelStats> stats;
+    for (int level = 0; level < pyramid.level_count(); ++level) {
+        check_progress(progress, "measure", double(level) / pyramid.level_count());
+        stats.push_back(measure_level(pyramid, level, settings.brdf, settings.fit, kReportTexelsPerLevel,
+                                      kReportSampleCap, settings.align));
+    }
+    timings.measure = seconds_since(start);
+
+    start = std::chrono::steady_clock::now();
+    const fs::path staging = make_staging_dir(out_dir);
+    BakeOutcome outcome;
+    try {
+        std::vector<std::string> names;
+        for (int level = 0; level < pyramid.level_count(); ++level) {
+            check_progress(progress, "write", double(level) / pyramid.level_count());
+            const LevelSize size = pyramid.size(level);
+            const float level_error = stats[size_t(level)].fit.mean;
+            for (int lobe = 0; lobe < pyramid.slots; ++lobe) {
+                const std::vector<float> rgba = lobe_texture(pyramid, level, lobe);
+                names.push_back(lobe_file_name(level, lobe));
+                write_rgba_exr((staging / names.back()).string(), size.width, size.height, rgba.data(),
+                               write.precision,
+                               file_attributes(pyramid, decoded, settings, write, level, lobe, level_error,
+                                               "vmf lobe: R = alpha, GBA = alpha * r"));
+            }
+            if (!write.color_path.empty()) {
+                const auto textures = color_textures(pyramid, color, level);
+                for (int lobe = 0; lobe < pyramid.slots; ++lobe) {
+                    names.push_back(color_file_name(level, lobe));
+                    write_rgba_exr((staging / names.back()).string(), size.width, size.height,
+                                   textures[size_t(lobe)].data(), write.precision,
+                                   file_attributes(pyramid, decoded, settings, write, level, lobe, level_error,
+                                                   "lobe colour: RGB = alpha * linear colour, A = alpha"));
+                }
+            }
+        }
+        timings.write = seconds_since(start);
+        write_text_atomic((staging / "report.json").string(),
+                          report_json(pyramid, decoded, settings, write, stats, timings, names));
+        check_progress(progress, "write", 1.0);
+
+        // Commit: from here on only renames within one folder.
+        const std::set<std::string> fresh(names.begin(), names.end());
+        for (const auto& entry : fs::directory_iterator(out_dir)) {
+            const std::string name = entry.path().filename().string();
+            if (is_bake_file(name) && !fresh.count(name)) fs::remove(entry.path());
+        }
+        names.push_back("report.json");
+        for (const std::string& name : names) {
+            fs::rename(staging / name, fs::path(out_dir) / name);
+            outcome.files.push_back((fs::path(out_dir) / name).string());
+        }
+        fs::remove(staging);
+    } catch (const fs::filesystem_error& e) {
+        std::error_code ignored;
+        fs::remove_all(staging, ignored);
+        throw Error(Status::io_error, std::string("cannot write into '") + out_dir + "': " + e.what());
+    } catch (...) {
+        std::error_code ignored;
+        fs::remove_all(staging, ignored);
+        throw;
+    }
+    outcome.timings = timings;
+    return outcome;
+}
+
+BakeOutcome bake_file(const std::string& input_path, const std::string& out_dir, const DecodeOptions& decode,
+                      const PyramidSettings& settings, const WriteSettings& write, const StageProgress& progress)
+{
+    // Fail on an unwritable output before spending minutes on the fit.
+    ensure_writable_directory(out_dir);
+    BakeTimings timings;
+    auto start = std::chrono::steady_clock::now();
+    check_progress(progress, "decode", 0.0);
+    const DecodeResult decoded = decode_normal_map(input_path, decode);
+    timings.decode = seconds_since(start);
+
+    start = std::chrono::steady_clock::now();
+    const LobePyramid pyramid = build_lobe_pyramid(decoded.map, settings, [&](double fraction) {
+        return !progress || progress("fit", fraction);
+    });
+    timings.fit = seconds_since(start);
+
+    WriteSettings named = write;
+    if (named.source_name.empty()) named.source_name = fs::path(input_path).filename().string();
+    return write_pyramid(pyramid, decoded, out_dir, settings, named, timings, progress);
+}
+
+}  // namespace ndfbake

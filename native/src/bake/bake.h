@@ -1,0 +1,48 @@
+// The whole bake: decode a normal map, fit its lobe pyramid, write lobe textures and a report.
+// The C API, the command line and the Blender add-on all run this one path.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "io/lobe_exr.h"
+#include "io/normal_decode.h"
+#include "pyramid/lobe_pyramid.h"
+
+namespace ndfbake {
+
+// Progress of a bake: stage name and fraction of the stage; return false to cancel.
+using StageProgress = std::function<bool(const char* stage, double fraction)>;
+
+struct WriteSettings {
+    PixelPrecision precision = PixelPrecision::half;
+    std::string color_path;   // optional base-colour image: per-lobe colour files
+    std::string source_name;  // recorded in every file
+};
+
+struct BakeTimings {
+    double decode = 0.0, fit = 0.0, measure = 0.0, write = 0.0;  // seconds
+};
+
+struct BakeOutcome {
+    std::vector<std::string> files;  // final paths, report.json last
+    BakeTimings timings;
+};
+
+// Lobe texture file name for a level and slot: "level03_lobe1.exr".
+std::string lobe_file_name(int level, int lobe);
+std::string color_file_name(int level, int lobe);
+
+// Writes the pyramid's files into out_dir. Everything goes to a staging folder inside out_dir
+// first and is renamed into place only once all of it is written, so a failure or a cancel leaves
+// out_dir exactly as it was (an earlier bake stays whole); stale files of an earlier bake with
+// more levels or lobes are removed at that point.
+BakeOutcome write_pyramid(const LobePyramid& pyramid, const DecodeResult& decoded, const std::string& out_dir,
+                          const PyramidSettings& settings, const WriteSettings& write, BakeTimings timings,
+                          const StageProgress& progress);
+
+BakeOutcome bake_file(const std::string& input_path, const std::string& out_dir, const DecodeOptions& decode,
+                      const PyramidSettings& settings, const WriteSettings& write, const StageProgress& progress);
+
+}  // namespace ndfbake

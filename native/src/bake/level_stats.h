@@ -1,0 +1,45 @@
+// How good a fitted level is: lobe counts and errors against the exact effective BRDF, beside the
+// baselines and the cost of alignment, measured on an even sample of texels.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "math/brdf.h"
+#include "pyramid/lobe_pyramid.h"
+
+namespace ndfbake {
+
+// Texels measured per level by reports, and fine normals per texel (a stride through the
+// footprint): the exact reference costs normals × directions, and these bounds keep a report of
+// a 4096² map to seconds. Tests that need every texel pass 0 (no limit).
+inline constexpr int kReportTexelsPerLevel = 64;
+inline constexpr int kReportSampleCap = 1024;
+
+struct ErrorSummary {
+    float mean = 0.0f;
+    float p95 = 0.0f;
+};
+
+struct LevelStats {
+    int level = 0;
+    LevelSize size;
+    std::array<uint64_t, kMaxLobes + 1> lobe_histogram{};  // over every texel of the level
+    int measured_texels = 0;
+    ErrorSummary fit;                // the pyramid's (aligned) lobes
+    ErrorSummary independent_fit;    // the same budget without alignment: alignment's cost
+    ErrorSummary single_vmf;
+    ErrorSummary toksvig;
+};
+
+// The exact-reference samples of one texel: its footprint, strided down to `sample_cap` (0: all).
+void texel_reference_samples(const NormalMap& map, WrapMode wrap, int level, int x, int y, int sample_cap,
+                             std::vector<WeightedNormal>& out);
+
+// `max_texels` = 0 measures every texel. `measure_alignment` adds independent_fit (one extra fit
+// per measured texel).
+LevelStats measure_level(const LobePyramid& pyramid, int level, const BaseBrdf& brdf,
+                         const TexelFitSettings& fit, int max_texels, int sample_cap, bool measure_alignment);
+
+}  // namespace ndfbake

@@ -1,0 +1,24 @@
+// Writing output files so that a reader (Blender, a second bake) never sees a half-written file:
+// everything is written to a temporary sibling and renamed over the final path in one step.
+#pragma once
+
+#include <functional>
+#include <string>
+
+namespace ndfbake {
+
+// Runs `writer` on a temporary path in final_path's directory, named
+// ".<stem>.tmp-<pid>-<counter><extension>" so format-by-extension writers still work, flushes it
+// to disk and renames it onto final_path. If anything throws, the temporary file is removed, the
+// exception propagates and final_path is left as it was.
+void write_file_atomic(const std::string& final_path,
+                       const std::function<void(const std::string& temp_path)>& writer);
+
+// Atomically replaces `path` with `text`. Throws Error(io_error) on failure.
+void write_text_atomic(const std::string& path, const std::string& text);
+
+// Creates `dir` (and its parents) if missing and proves it writable by creating and removing a
+// probe file. Throws Error(io_error, "output folder '<dir>' is not writable: <reason>").
+void ensure_writable_directory(const std::string& dir);
+
+}  // namespace ndfbake

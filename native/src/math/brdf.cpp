@@ -1,0 +1,167 @@
+#include "math/brdf.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+#include "error.h"
+#include "math/vmf.h"
+
+namespace ndfbake {
+
+namespace {
+
+constexpr float kInvPi = float(std::numbers::inv_pi);
+
+// Legendre coefficients a_l of max(c, 0) = Σ a_l P_l(c):
+// a_l = (2l+1)/2 ∫₀¹ c P_l(c) dc; ∫₀¹ c P_l = 1/2, 1/3 (l = 0, 1), 0 for odd l ≥ 3, and
+// (−1)^{l/2+1} (l−2)! / (2^l (l/2−1)! (l/2+1)!) for even l ≥ 2.
+const std::array<double, kLambertBands + 1>& clamped_cosine_legendre()
+{
+    static const std::array<double, kLambertBands + 1> coefficients = [] {
+        std::array<double, kLambertBands + 1> a{};
+        a[0] = 0.5 * 0.5;
+        a[1] = 1.5 / 3.0;
+        for (int l = 2; l <= kLambertBands; l += 2) {
+            // lgamma keeps the factorials finite for large l.
+            const double log_mag = std::lgamma(l - 1.0) - l * std::log(2.0) - std::lgamma(l / 2.0) -
+                                   std::lgamma(l / 2.0 + 2.0);
+            const double sign = ((l / 2 + 1) % 2 == 0) ? 1.0 : -1.0;
+            a[size_t(l)] = (2.0 * l + 1.0) / 2.0 * sign * std::exp(log_mag);
+        }
+        return a;
+    }();
+    return coefficients;
+}
+
+float normalized_blinn_phong(float c, float s)
+{
+    if (c <= 0.0f) return 0.0f;
+    return (s + 1.0f) * (0.5f * kInvPi) * std::exp(s * std::log(c));
+}
+
+float ggx_distribution(float c, float alpha)
+{
+    if (c <= 0.0f) return 0.0f;
+    const float a2 = alpha * alpha;
+    const float d = c * c * (a2 - 1.0f) + 1.0f;
+    return a2 * kInvPi / (d * d);
+}
+
+}  // namespace
+
+BaseBrdf BaseBrdf::lambert() { return BaseBrdf(BrdfKind::lambert, 0.0f); }
+
+BaseBrdf BaseBrdf::blinn_phong(float exponent)
+{
+    if (!(exponent >= kMinBlinnPhongExponent && exponent <= kMaxBlinnPhongExponent))
+        throw Error(Status::invalid_argument, "Blinn-Phong exponent must be in [1, 10000], got " +
+                                                  std::to_string(exponent));
+    return BaseBrdf(BrdfKind::blinn_phong, exponent);
+}
+
+BaseBrdf BaseBrdf::ggx(float roughness)
+{
+    if (!(roughness >= kMinGgxRoughness && roughness <= kMaxGgxRoughness))
+        throw Error(Status::invalid_argument,
+                    "GGX roughness must be in [0.01, 1], got " + std::to_string(roughness));
+    return BaseBrdf(BrdfKind::ggx, roughness);
+}
+
+BaseBrdf BaseBrdf::parse(const std::string& text)
+{
+    if (text == "lambert") return lambert();
+    const auto colon = text.find(':');
+    const std::string name = text.substr(0, colon);
+    if (colon != std::string::npos && (name == "blinn-phong" || name == "ggx")) {
+        const std::string value = text.substr(colon + 1);
+        char* end = nullptr;
+        const float parameter = std::strtof(value.c_str(), &end);
+        if (!value.empty() && end && *end == '\0')
+            return name == "ggx" ? ggx(parameter) : blinn_phong(parameter);
+    }
+    throw Error(Status::invalid_argument, "unknown BRDF '" + text +
+                                              "': expected lambert, blinn-phong:EXPONENT or ggx:ROUGHNESS");
+}
+
+std::string BaseBrdf::to_string() const
+{
+    char buffer[64];
+    switch (kind_) {
+    case BrdfKind::lambert: return "lambert";
+    case BrdfKind::blinn_phong: std::snprintf(buffer, sizeof buffer, "blinn-phong:%g", parameter_); break;
+    case BrdfKind::ggx: std::snprintf(buffer, sizeof buffer, "ggx:%g", parameter_); break;
+    }
+    return buffer;
+}
+
+float BaseBrdf::eval(float c) const
+{
+    switch (kind_) {
+    case BrdfKind::lambert: return std::max(c, 0.0f) * kInvPi;
+    case BrdfKind::blinn_phong: return normalized_blinn_phong(c, parameter_);
+    case BrdfKind::ggx: return ggx_distribution(c, parameter_ * parameter_);
+    }
+    return 0.0f;
+}
+
+ConvolvedLobe BaseBrdf::convolved(float kappa) const
+{
+    ConvolvedLobe lobe;
+    lobe.kind_ = int(kind_);
+    switch (kind_) {
+    case BrdfKind::lambert: {
+        const auto& a = clamped_cosine_legendre();
+        std::array<double, kLambertBands + 1> attenuation{};
+        vmf_legendre_coefficients(kappa, kLambertBands, attenuation.data());
+        for (int l = 0; l <= kLambertBands; ++l)
+            lobe.lambert_bands_[size_t(l)] = float(a[size_t(l)] * attenuation[size_t(l)]);
+        break;
+    }
+    case BrdfKind::blinn_phong:
+        lobe.parameter_ = kappa * parameter_ / (kappa + parameter_);  // eq. 20
+        break;
+    case BrdfKind::ggx: {
+        const float alpha = parameter_ * parameter_;
+        // A lobe wider than α = 1 is beyond what Blender's roughness can express.
+        lobe.parameter_ = std::min(1.0f, std::sqrt(alpha * alpha + 2.0f / kappa));
+        break;
+    }
+    }
+    return lobe;
+}
+
+float ConvolvedLobe::eval(float c) const
+{
+    switch (BrdfKind(kind_)) {
+    case BrdfKind::lambert: {
+        // Σ a_l A_l P_l(c) with the three-term Legendre recurrence.
+        float p_prev = 1.0f, p = c;
+        float sum = lambert_bands_[0] + lambert_bands_[1] * c;
+        for (int l = 1; l < kLambertBands; l += 1) {
+            const float p_next = (float(2 * l + 1) * c * p - float(l) * p_prev) / float(l + 1);
+            p_prev = p;
+            p = p_next;
+            sum += lambert_bands_[size_t(l + 1)] * p;
+        }
+        return std::max(0.0f, sum * kInvPi);
+    }
+    case BrdfKind::blinn_phong: return normalized_blinn_phong(c, parameter_);
+    case BrdfKind::ggx: return ggx_distribution(c, parameter_);
+    }
+    return 0.0f;
+}
+
+float BaseBrdf::angular_width() const
+{
+    switch (kind_) {
+    case BrdfKind::lambert: return 1.0f;
+    case BrdfKind::blinn_phong: return 1.0f / std::sqrt(parameter_);  // c^s ≈ exp(−s θ²/2)
+    case BrdfKind::ggx: return parameter_ * parameter_;                // α: the slope scale
+    }
+    return 1.0f;
+}
+
+}  // namespace ndfbake

@@ -1,0 +1,79 @@
+#include "math/vmf.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace ndfbake {
+
+namespace {
+// Below this κ the series forms are exact to double precision and the closed forms cancel.
+constexpr double kSmallKappa = 1e-2;
+}  // namespace
+
+double mean_resultant_length(double kappa)
+{
+    if (kappa < kSmallKappa) {
+        // coth κ − 1/κ = κ/3 − κ³/45 + 2κ⁵/945 − …
+        const double k2 = kappa * kappa;
+        return kappa * (1.0 / 3.0 - k2 / 45.0);
+    }
+    return 1.0 / std::tanh(kappa) - 1.0 / kappa;
+}
+
+float kappa_from_resultant(double r)
+{
+    if (!(r > 0.0)) return kKappaMin;  // also catches NaN
+    if (r >= 1.0) return kKappaMax;
+    const double kappa = r * (3.0 - r * r) / (1.0 - r * r);
+    return float(std::clamp(kappa, double(kKappaMin), double(kKappaMax)));
+}
+
+double resultant_from_kappa(float kappa)
+{
+    const double k = std::clamp(double(kappa), double(kKappaMin), double(kKappaMax));
+    // Solve g(R) = R(3 − R²) − k(1 − R²) = 0 on (0, 1): g(0) = −k < 0 < 2 = g(1), and g is
+    // increasing there, so bisection is safe; Newton from the bracket then converges quickly.
+    double lo = 0.0, hi = 1.0;
+    double r = std::clamp(mean_resultant_length(k), 1e-12, 1.0 - 1e-12);
+    for (int i = 0; i < 100; ++i) {
+        const double g = r * (3.0 - r * r) - k * (1.0 - r * r);
+        if (g < 0.0) lo = r; else hi = r;
+        const double dg = 3.0 - 3.0 * r * r + 2.0 * k * r;
+        double next = r - g / dg;
+        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+        if (std::abs(next - r) <= 1e-16) { r = next; break; }
+        r = next;
+    }
+    return r;
+}
+
+double log_vmf_normalizer_shifted(double kappa)
+{
+    constexpr double log_4pi = 2.5310242469692907;  // log(4π)
+    constexpr double log_2pi = 1.8378770664093453;  // log(2π)
+    if (kappa < kSmallKappa) {
+        // log(κ / sinh κ) = −κ²/6 + O(κ⁴)
+        return -log_4pi - kappa * kappa / 6.0 + kappa;
+    }
+    // log C + κ = log κ − log 2π − log(1 − e^{−2κ})
+    return std::log(kappa) - log_2pi - std::log1p(-std::exp(-2.0 * kappa));
+}
+
+void vmf_legendre_coefficients(double kappa, int lmax, double* out)
+{
+    // Ratios ρ_l = I_{l+1/2}/I_{l−1/2} from the continued fraction ρ_l = 1/((2l+1)/κ + ρ_{l+1}),
+    // run downwards from far above lmax (Miller): upward recurrence loses all digits for small κ.
+    const double k = std::max(kappa, double(kKappaMin));
+    const int start = lmax + 40 + int(std::sqrt(k));
+    double rho = 0.0;
+    std::vector<double> ratios(size_t(lmax) + 1, 0.0);
+    for (int l = start; l >= 1; --l) {
+        rho = 1.0 / ((2.0 * l + 1.0) / k + rho);
+        if (l <= lmax) ratios[size_t(l)] = rho;
+    }
+    out[0] = 1.0;
+    for (int l = 1; l <= lmax; ++l) out[l] = out[l - 1] * ratios[size_t(l)];
+}
+
+}  // namespace ndfbake

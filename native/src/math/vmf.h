@@ -1,0 +1,50 @@
+// von Mises-Fisher lobes on S² (Han et al. 2007, §7): the value type and its scalar functions.
+#pragma once
+
+#include "math/vec3.h"
+
+namespace ndfbake {
+
+// κ below this is a uniform distribution to float precision (A(κ) ≈ κ/3 < 4e-4); it also keeps
+// the direction of a lobe meaningful in storage, where r = A(κ)·μ must not round to zero.
+inline constexpr float kKappaMin = 1e-3f;
+// κ at which identical normals saturate (R → 1 makes A⁻¹ diverge). 1e4 is a 0.6° spread: sharper
+// than any BRDF lobe we convolve with (Blinn-Phong s ≤ 1e4), and 1 − 1/κ is still exact in float.
+inline constexpr float kKappaMax = 1e4f;
+
+// A normalized vMF lobe scaled by its mixture weight: α · γ(n; μ, κ).
+// Invariants: α ∈ [0, 1], |μ| = 1, κ ∈ [kKappaMin, kKappaMax].
+struct VmfLobe {
+    float alpha = 0.0f;
+    Vec3 mu{0.0f, 0.0f, 1.0f};
+    float kappa = kKappaMin;
+};
+
+// A(κ) = coth κ − 1/κ, the mean resultant length of a vMF (eq. 16).
+double mean_resultant_length(double kappa);
+
+// κ ≈ (3R − R³)/(1 − R²) (Banerjee et al. 2005; Algorithm 1 line 12), clamped to
+// [kKappaMin, kKappaMax]: the guard for R → 1 (identical normals) and R → 0 (normals cancel).
+float kappa_from_resultant(double resultant_length);
+
+// The inverse of kappa_from_resultant on [kKappaMin, kKappaMax]: the |r| whose Banerjee κ is
+// exactly `kappa`. Textures store r at this length so that a shader evaluating Algorithm 2
+// line 9 recovers the fitted κ bit for bit, not A(κ)'s slightly different value.
+double resultant_from_kappa(float kappa);
+
+// log C(κ) + κ, where C(κ) = κ / (4π sinh κ) is the vMF normalizer (eq. 15). Shifted by κ so
+// that log γ(n) = shifted + κ(μ·n − 1) never adds two huge terms of opposite sign.
+double log_vmf_normalizer_shifted(double kappa);
+
+// log γ(n; μ, κ), the log density of the normalized lobe.
+inline float log_vmf_density(const VmfLobe& lobe, const Vec3& n, float log_norm_shifted)
+{
+    return log_norm_shifted + lobe.kappa * (dot(lobe.mu, n) - 1.0f);
+}
+
+// The Legendre coefficient A_l(κ) = I_{l+1/2}(κ) / I_{1/2}(κ) of a normalized vMF for l = 0..lmax
+// (Funk-Hecke: convolving a zonal function with the lobe scales its degree-l band by A_l).
+// A_1 = A(κ); A_l → exp(−l(l+1)/(2κ)) for large κ (cf. eq. 19).
+void vmf_legendre_coefficients(double kappa, int lmax, double* out);
+
+}  // namespace ndfbake

@@ -1,0 +1,148 @@
+#include "ndf/spherical_em.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace ndfbake {
+
+namespace {
+
+// A lobe whose total responsibility is under half a sample explains nothing (it is "dead").
+constexpr double kDeadLobeSampleWeight = 0.5;
+
+struct LobeTerms {
+    float log_alpha;           // −∞ for a dead lobe
+    float log_norm_shifted;
+};
+
+std::vector<LobeTerms> lobe_terms(std::span<const VmfLobe> lobes)
+{
+    std::vector<LobeTerms> terms(lobes.size());
+    for (size_t j = 0; j < lobes.size(); ++j) {
+        terms[j].log_alpha = lobes[j].alpha > 0.0f ? std::log(lobes[j].alpha)
+                                                   : -std::numeric_limits<float>::infinity();
+        terms[j].log_norm_shifted = float(log_vmf_normalizer_shifted(lobes[j].kappa));
+    }
+    return terms;
+}
+
+// log Σ_j α_j γ_j(n); fills log_p[j] = log α_j γ_j(n).
+float log_mixture_density(std::span<const VmfLobe> lobes, std::span<const LobeTerms> terms,
+                          const Vec3& n, float* log_p)
+{
+    float max_log = -std::numeric_limits<float>::infinity();
+    for (size_t j = 0; j < lobes.size(); ++j) {
+        log_p[j] = terms[j].log_alpha + log_vmf_density(lobes[j], n, terms[j].log_norm_shifted);
+        max_log = std::max(max_log, log_p[j]);
+    }
+    if (!std::isfinite(max_log)) return max_log;
+    float sum = 0.0f;
+    for (size_t j = 0; j < lobes.size(); ++j) sum += std::exp(log_p[j] - max_log);
+    return max_log + std::log(sum);
+}
+
+}  // namespace
+
+VmfLobe single_vmf_lobe(std::span<const WeightedNormal> samples)
+{
+    Vec3d sum;
+    double total = 0.0;
+    for (const WeightedNormal& s : samples) {
+        sum.add(s.n, s.weight);
+        total += s.weight;
+    }
+    VmfLobe lobe;
+    lobe.alpha = 1.0f;
+    if (total <= 0.0) return lobe;
+    const double r = sum.length() / total;
+    lobe.kappa = kappa_from_resultant(r);
+    // Normals that cancel (R → 0) have no mean direction; the surface normal is the neutral one.
+    lobe.mu = normalize_or(sum.to_float(), Vec3{0.0f, 0.0f, 1.0f});
+    return lobe;
+}
+
+EmResult fit_vmf_mixture(std::span<const WeightedNormal> samples, std::vector<VmfLobe>& lobes,
+                         const EmSettings& settings, std::span<const Vec3> alignment_pull)
+{
+    const size_t J = lobes.size();
+    EmResult result;
+    if (J == 0 || samples.empty()) return result;
+
+    double total_weight = 0.0;
+    for (const WeightedNormal& s : samples) total_weight += s.weight;
+    const double min_weight = samples.size() > 0 ? total_weight / double(samples.size()) : 1.0;
+
+    std::vector<double> lobe_weight(J);
+    std::vector<Vec3d> lobe_sum(J);
+    std::vector<bool> reseeded(J, false);
+    std::vector<float> log_p(J);
+    double previous = -std::numeric_limits<double>::infinity();
+
+    for (int iteration = 0; iteration < settings.max_iterations; ++iteration) {
+        const std::vector<LobeTerms> terms = lobe_terms(lobes);
+        std::fill(lobe_weight.begin(), lobe_weight.end(), 0.0);
+        std::fill(lobe_sum.begin(), lobe_sum.end(), Vec3d{});
+        double log_likelihood = 0.0;
+        float worst_log = std::numeric_limits<float>::infinity();
+        size_t worst_sample = 0;
+
+        // E-step (Algorithm 1 line 5, with α_j), accumulating the M-step's sums on the fly.
+        for (size_t i = 0; i < samples.size(); ++i) {
+            const WeightedNormal& s = samples[i];
+            const float lse = log_mixture_density(lobes, terms, s.n, log_p.data());
+            if (!std::isfinite(lse)) continue;
+            log_likelihood += double(s.weight) * lse;
+            if (lse < worst_log) { worst_log = lse; worst_sample = i; }
+            for (size_t j = 0; j < J; ++j) {
+                const double z = double(s.weight) * std::exp(double(log_p[j] - lse));
+                lobe_weight[j] += z;
+                lobe_sum[j].add(s.n, z);
+            }
+        }
+        result.iterations = iteration + 1;
+        result.mean_log_likelihood = log_likelihood / total_weight;
+
+        // M-step (lines 9–14).
+        for (size_t j = 0; j < J; ++j) {
+            VmfLobe& lobe = lobes[j];
+            if (lobe_weight[j] < kDeadLobeSampleWeight * min_weight) {
+                if (!reseeded[j] && lobe.alpha > 0.0f) {
+                    reseeded[j] = true;
+                    lobe.mu = samples[worst_sample].n;
+                    lobe.alpha = float(min_weight / total_weight);
+                    previous = -std::numeric_limits<double>::infinity();  // the model changed
+                } else {
+                    lobe.alpha = 0.0f;
+                }
+                continue;
+            }
+            lobe.alpha = float(lobe_weight[j] / total_weight);
+            const Vec3 r = (lobe_sum[j].to_float()) / float(lobe_weight[j]);
+            lobe.kappa = kappa_from_resultant(length(r));
+            const Vec3 pull = j < alignment_pull.size() ? alignment_pull[j] : Vec3{};
+            lobe.mu = normalize_or(r + pull, lobe.mu);  // eq. 23; R → 0 keeps the old direction
+        }
+
+        const double change = result.mean_log_likelihood - previous;
+        previous = result.mean_log_likelihood;
+        if (std::abs(change) < settings.convergence * (1.0 + std::abs(previous))) break;
+    }
+    return result;
+}
+
+void vmf_responsibilities(std::span<const WeightedNormal> samples, std::span<const VmfLobe> lobes,
+                          std::vector<float>& out)
+{
+    const size_t J = lobes.size();
+    out.assign(samples.size() * J, 0.0f);
+    const std::vector<LobeTerms> terms = lobe_terms(lobes);
+    std::vector<float> log_p(J);
+    for (size_t i = 0; i < samples.size(); ++i) {
+        const float lse = log_mixture_density(lobes, terms, samples[i].n, log_p.data());
+        if (!std::isfinite(lse)) continue;
+        for (size_t j = 0; j < J; ++j) out[i * J + j] = std::exp(log_p[j] - lse);
+    }
+}
+
+}  // namespace ndfbake

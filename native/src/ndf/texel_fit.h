@@ -1,0 +1,42 @@
+// One texel's NDF: the fewest vMF lobes whose effective BRDF meets the tolerance.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "math/vmf.h"
+#include "ndf/effective_brdf.h"
+#include "ndf/spherical_em.h"
+
+namespace ndfbake {
+
+inline constexpr int kMaxLobes = 8;
+// EM's starting κ is capped: seeds taken from finer levels can be near kKappaMax, and a start
+// that sharp makes the first E-step a hard assignment that EM cannot recover from.
+inline constexpr float kMaxSeedKappa = 1e3f;
+
+struct TexelFitSettings {
+    int max_lobes = 4;        // 1..kMaxLobes
+    float tolerance = 0.05f;  // relative effective-BRDF error; ≤ 0 always uses max_lobes
+    EmSettings em;
+};
+
+struct TexelFit {
+    std::vector<VmfLobe> lobes;  // every α > 0, Σα = 1
+    float error = -1.0f;         // relative effective-BRDF error, −1 when not measured
+};
+
+// Chooses up to `count` seeds, farthest apart first (Hochbaum-Shmoys, §7.1): the heaviest
+// candidate, then repeatedly the one whose nearest chosen seed is farthest away. Candidates are
+// the finer level's lobes; when they hold fewer distinct directions, the samples farthest from
+// the seeds fill in. Returns fewer than `count` seeds only when the samples have no more
+// distinct directions.
+std::vector<VmfLobe> farthest_point_seeds(std::span<const VmfLobe> candidates,
+                                          std::span<const WeightedNormal> samples, int count);
+
+// The lobe budget: one lobe, then more (up to max_lobes) only while the error stays above the
+// tolerance. `meter` scores candidates; pass nullptr when tolerance ≤ 0.
+TexelFit fit_texel(std::span<const WeightedNormal> samples, std::span<const VmfLobe> child_lobes,
+                   const TexelFitSettings& settings, const TexelErrorMeter* meter);
+
+}  // namespace ndfbake

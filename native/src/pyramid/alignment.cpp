@@ -1,0 +1,117 @@
+#include "pyramid/alignment.h"
+
+#include <algorithm>
+#include <vector>
+
+namespace ndfbake {
+
+namespace {
+
+// The alignment refinement is a short polish of an already converged fit.
+constexpr int kAlignmentIterations = 4;
+
+float slot_score(const VmfLobe& lobe, int slot, std::span<const VmfLobe> parent, std::span<const VmfLobe> left)
+{
+    float score = 0.0f;
+    if (!parent.empty()) score += parent[size_t(slot)].alpha * dot(lobe.mu, parent[size_t(slot)].mu);
+    if (!left.empty()) score += left[size_t(slot)].alpha * dot(lobe.mu, left[size_t(slot)].mu);
+    return score;
+}
+
+}  // namespace
+
+void assign_slots(std::span<const VmfLobe> lobes, std::span<const VmfLobe> parent,
+                  std::span<const VmfLobe> left, std::span<int> slot_of_lobe)
+{
+    const int slots = int(std::max(parent.size(), left.size()));
+    const int count = int(lobes.size());
+    std::vector<bool> lobe_done(size_t(count), false), slot_used(size_t(std::max(slots, count)), false);
+    std::fill(slot_of_lobe.begin(), slot_of_lobe.end(), -1);
+    for (int assigned = 0; assigned < count; ++assigned) {
+        int best_lobe = -1, best_slot = -1;
+        float best = -1e30f;
+        for (int i = 0; i < count; ++i) {
+            if (lobe_done[size_t(i)]) continue;
+            for (int s = 0; s < std::max(slots, count); ++s) {
+                if (slot_used[size_t(s)]) continue;
+                const float score = s < slots ? slot_score(lobes[size_t(i)], s, parent, left) : -1e29f;
+                // Ties go to the heavier lobe and the lower slot: a deterministic order.
+                if (score > best + 1e-7f ||
+                    (score >= best - 1e-7f && best_lobe >= 0 && lobes[size_t(i)].alpha > lobes[size_t(best_lobe)].alpha)) {
+                    best = score;
+                    best_lobe = i;
+                    best_slot = s;
+                }
+            }
+        }
+        lobe_done[size_t(best_lobe)] = true;
+        slot_used[size_t(best_slot)] = true;
+        slot_of_lobe[size_t(best_lobe)] = best_slot;
+    }
+}
+
+void align_lobe_slots(LobePyramid& pyramid, const PyramidSettings& settings, const ProgressTick& tick)
+{
+    const int slots = pyramid.slots;
+    const int top = pyramid.level_count() - 1;
+    int rows_total = 0;
+    for (int l = top - 1; l >= 0; --l) rows_total += pyramid.size(l).height;
+    int rows_before = 0;
+
+    EmSettings polish = settings.fit.em;
+    polish.max_iterations = kAlignmentIterations;
+
+    for (int l = top - 1; l >= 0; --l) {
+        LobeLevel& level = pyramid.levels[size_t(l)];
+        const int width = level.size.width;
+        const int rows_here = level.size.height;
+        parallel_rows(rows_here, settings.threads, [&](int y) {
+            std::vector<VmfLobe> parent(static_cast<size_t>(slots)), left(static_cast<size_t>(slots)), current(static_cast<size_t>(slots));
+            std::vector<WeightedNormal> samples;
+            for (int x = 0; x < width; ++x) {
+                pyramid.texel(l + 1, x / 2, y / 2, parent);
+                std::span<const VmfLobe> left_span;
+                if (x > 0) {
+                    pyramid.texel(l, x - 1, y, left);
+                    left_span = left;
+                }
+                const size_t t = size_t(y) * size_t(width) + size_t(x);
+                if (l == 0) {
+                    const VmfLobe lobe{1.0f, pyramid.source.normals[t], kKappaMax};
+                    int slot = 0;
+                    assign_slots(std::span(&lobe, 1), parent, left_span, std::span(&slot, 1));
+                    level.level0_slot[t] = uint8_t(slot);
+                    continue;
+                }
+                std::vector<VmfLobe> lobes = pyramid.texel_lobes(l, x, y);
+                std::vector<int> slot_of(lobes.size());
+                assign_slots(lobes, parent, left_span, slot_of);
+
+                if (settings.alignment_strength > 0.0f && lobes.size() > 1) {
+                    // eq. 23's pull for each lobe: C Σ_k α_jk μ_jk over the neighbours' slot.
+                    std::vector<Vec3> pull(lobes.size());
+                    for (size_t i = 0; i < lobes.size(); ++i) {
+                        const int s = slot_of[i];
+                        Vec3 sum = parent[size_t(s)].alpha * parent[size_t(s)].mu;
+                        if (x > 0) sum += left[size_t(s)].alpha * left[size_t(s)].mu;
+                        pull[i] = settings.alignment_strength * sum;
+                    }
+                    gather_footprint(pyramid.source, l, x, y, pyramid.wrap, samples);
+                    std::vector<VmfLobe> polished = lobes;
+                    fit_vmf_mixture(samples, polished, polish, pull);
+                    // A pull that empties a lobe would change the budget's choice: keep the fit.
+                    if (std::all_of(polished.begin(), polished.end(), [](const VmfLobe& l) { return l.alpha > 0.0f; }))
+                        lobes = std::move(polished);
+                }
+                std::fill(current.begin(), current.end(), VmfLobe{});
+                for (size_t i = 0; i < lobes.size(); ++i) current[size_t(slot_of[i])] = lobes[i];
+                std::copy(current.begin(), current.end(), &level.lobes[t * size_t(slots)]);
+            }
+        }, [&](double fraction) {
+            return !tick || tick(rows_total > 0 ? (rows_before + fraction * rows_here) / rows_total : 1.0);
+        });
+        rows_before += rows_here;
+    }
+}
+
+}  // namespace ndfbake

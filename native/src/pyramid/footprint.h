@@ -1,0 +1,34 @@
+// MIP levels and the fine texels each coarse texel covers, for any size and both edge modes.
+#pragma once
+
+#include <vector>
+
+#include "ndf/weighted_normal.h"
+#include "normal_map.h"
+
+namespace ndfbake {
+
+enum class WrapMode {
+    clamp,  // the image ends at its edges: edge texels cover fewer fine texels
+    wrap,   // the image tiles: footprints continue across the edges
+};
+
+struct LevelSize {
+    int width = 0;
+    int height = 0;
+    friend bool operator==(const LevelSize&, const LevelSize&) = default;
+};
+
+// 1 + ⌈log₂ max(w, h)⌉ levels, down to 1×1.
+int level_count(int width, int height);
+// Level L is ⌈w / 2^L⌉ × ⌈h / 2^L⌉ (at least 1): texel x covers fine columns [x·2^L, (x+1)·2^L),
+// so every fine texel belongs to exactly one texel per level and a texel's children partition it.
+LevelSize level_size(int width, int height, int level);
+
+// The fine normals under texel (x, y) of `level`, with weights. Clamp mode drops columns and
+// rows past the edge; wrap mode takes them modulo the size, and a footprint wider than the image
+// covers each fine texel as many times as it repeats (as weight, not as copies).
+void gather_footprint(const NormalMap& map, int level, int x, int y, WrapMode wrap,
+                      std::vector<WeightedNormal>& out);
+
+}  // namespace ndfbake

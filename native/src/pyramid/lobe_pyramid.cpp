@@ -1,0 +1,123 @@
+#include "pyramid/lobe_pyramid.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include "math/sphere.h"
+#include "pyramid/alignment.h"
+
+namespace ndfbake {
+
+namespace {
+
+VmfLobe level0_lobe(const Vec3& n) { return {1.0f, n, kKappaMax}; }
+
+// Deterministic stride through a footprint so that large texels are scored on a bounded number
+// of normals spread over the whole footprint.
+std::span<const WeightedNormal> subsample(std::span<const WeightedNormal> samples, int cap,
+                                          std::vector<WeightedNormal>& storage)
+{
+    if (cap <= 0 || int(samples.size()) <= cap) return samples;
+    storage.clear();
+    const double stride = double(samples.size()) / cap;
+    for (int i = 0; i < cap; ++i) storage.push_back(samples[size_t(i * stride)]);
+    return storage;
+}
+
+void store_texel(LobeLevel& level, int slots, int x, int y, std::vector<VmfLobe> lobes, float error)
+{
+    std::sort(lobes.begin(), lobes.end(), [](const VmfLobe& a, const VmfLobe& b) { return a.alpha > b.alpha; });
+    const size_t texel = size_t(y) * size_t(level.size.width) + size_t(x);
+    VmfLobe* out = &level.lobes[texel * size_t(slots)];
+    for (int s = 0; s < slots; ++s) out[s] = s < int(lobes.size()) ? lobes[size_t(s)] : VmfLobe{};
+    level.budget_error[texel] = error;
+}
+
+
+}  // namespace
+
+void LobePyramid::texel(int level, int x, int y, std::span<VmfLobe> out) const
+{
+    const LobeLevel& l = levels[size_t(level)];
+    const size_t t = size_t(y) * size_t(l.size.width) + size_t(x);
+    if (level == 0) {
+        std::fill(out.begin(), out.end(), VmfLobe{});
+        out[l.level0_slot[t]] = level0_lobe(source.normals[t]);
+        return;
+    }
+    std::copy_n(&l.lobes[t * size_t(slots)], size_t(slots), out.begin());
+}
+
+std::vector<VmfLobe> LobePyramid::texel_lobes(int level, int x, int y) const
+{
+    std::vector<VmfLobe> all(static_cast<size_t>(slots));
+    texel(level, x, y, all);
+    std::erase_if(all, [](const VmfLobe& l) { return !(l.alpha > 0.0f); });
+    return all;
+}
+
+int LobePyramid::lobe_count(int level, int x, int y) const { return int(texel_lobes(level, x, y).size()); }
+
+LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& settings, const ProgressTick& tick)
+{
+    LobePyramid pyramid;
+    pyramid.source = map;
+    pyramid.wrap = settings.wrap;
+    pyramid.slots = std::clamp(settings.fit.max_lobes, 1, kMaxLobes);
+    const int slots = pyramid.slots;
+    const int levels = level_count(map.width, map.height);
+    pyramid.levels.resize(static_cast<size_t>(levels));
+    for (int l = 0; l < levels; ++l) {
+        LobeLevel& level = pyramid.levels[size_t(l)];
+        level.size = level_size(map.width, map.height, l);
+        const size_t texels = size_t(level.size.width) * size_t(level.size.height);
+        level.budget_error.assign(texels, -1.0f);
+        if (l == 0) level.level0_slot.assign(texels, 0);
+        else level.lobes.assign(texels * size_t(slots), VmfLobe{});
+    }
+
+    const bool budgeted = settings.fit.tolerance > 0.0f && slots > 1;
+    const std::vector<Vec3> budget_directions = fibonacci_hemisphere(
+        std::min(settings.budget_directions, error_direction_count(settings.brdf)));
+
+    // Fitting takes one share per level ≥ 1, alignment one share in all.
+    const double share = 1.0 / double(levels);
+    double done = 0.0;
+    auto stage_tick = [&](double fraction) { return !tick || tick(done + share * fraction); };
+
+    for (int l = 1; l < levels; ++l) {
+        LobeLevel& level = pyramid.levels[size_t(l)];
+        const LobeLevel& finer = pyramid.levels[size_t(l - 1)];
+        parallel_rows(level.size.height, settings.threads, [&](int y) {
+            std::vector<WeightedNormal> samples, scored;
+            std::vector<VmfLobe> children, child(static_cast<size_t>(slots));
+            for (int x = 0; x < level.size.width; ++x) {
+                gather_footprint(map, l, x, y, settings.wrap, samples);
+                children.clear();
+                for (int cy = 2 * y; cy < std::min(2 * y + 2, finer.size.height); ++cy)
+                    for (int cx = 2 * x; cx < std::min(2 * x + 2, finer.size.width); ++cx) {
+                        pyramid.texel(l - 1, cx, cy, child);
+                        for (const VmfLobe& lobe : child)
+                            if (lobe.alpha > 0.0f) children.push_back(lobe);
+                    }
+                TexelFit fit;
+                if (budgeted) {
+                    const TexelErrorMeter meter(subsample(samples, settings.budget_sample_cap, scored),
+                                                settings.brdf, budget_directions);
+                    fit = fit_texel(samples, children, settings.fit, &meter);
+                } else {
+                    fit = fit_texel(samples, children, settings.fit, nullptr);
+                }
+                store_texel(level, slots, x, y, std::move(fit.lobes), fit.error);
+            }
+        }, stage_tick);
+        done += share;
+    }
+
+    if (settings.align && slots > 1)
+        align_lobe_slots(pyramid, settings, [&](double fraction) { return !tick || tick(done + share * fraction); });
+    if (tick) tick(1.0);
+    return pyramid;
+}
+
+}  // namespace ndfbake

@@ -1,0 +1,62 @@
+// The vMF lobes of every texel of every MIP level of a normal map.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "math/brdf.h"
+#include "ndf/texel_fit.h"
+#include "normal_map.h"
+#include "pyramid/footprint.h"
+#include "pyramid/parallel.h"
+
+namespace ndfbake {
+
+struct PyramidSettings {
+    TexelFitSettings fit;
+    BaseBrdf brdf = BaseBrdf::ggx(0.5f);
+    WrapMode wrap = WrapMode::wrap;
+    // Aligned lobes (eq. 23): slot j of neighbouring texels and levels point the same way.
+    bool align = true;
+    float alignment_strength = 0.25f;  // C in eq. 23
+    int threads = 0;                   // 0: all cores
+    // The lobe budget scores candidates on a reduced problem: at most this many directions and
+    // fine normals per texel (a deterministic stride through the footprint). Reported errors use
+    // the full problem.
+    int budget_directions = 256;
+    int budget_sample_cap = 256;
+};
+
+struct LobeLevel {
+    LevelSize size;
+    // size.width × size.height texels × slots lobes; α = 0 marks an empty slot. Empty at level 0,
+    // whose texels are the source normals themselves (one lobe of κ = kKappaMax each).
+    std::vector<VmfLobe> lobes;
+    std::vector<uint8_t> level0_slot;  // level 0 only: the slot its one lobe occupies
+    std::vector<float> budget_error;   // per texel; −1 where the budget did not measure
+};
+
+class LobePyramid {
+public:
+    NormalMap source;
+    WrapMode wrap = WrapMode::wrap;
+    int slots = 0;
+    std::vector<LobeLevel> levels;
+
+    int level_count() const { return int(levels.size()); }
+    LevelSize size(int level) const { return levels[size_t(level)].size; }
+    // The `slots` lobes of a texel, empty slots with α = 0.
+    void texel(int level, int x, int y, std::span<VmfLobe> out) const;
+    // The non-empty lobes of a texel.
+    std::vector<VmfLobe> texel_lobes(int level, int x, int y) const;
+    int lobe_count(int level, int x, int y) const;
+};
+
+// Fits every level ≥ 1 from all the fine normals under each texel (§7.1), seeded from the level
+// below, then aligns lobe slots from the top level down. `tick` gets the overall fraction done
+// and may cancel (Error(cancelled)).
+LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& settings,
+                               const ProgressTick& tick);
+
+}  // namespace ndfbake

@@ -1,0 +1,258 @@
+// The `ndfbake` command line: a client of the public C API, like the Blender add-on.
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "ndfbake.h"
+
+namespace {
+
+const char* const kUsage = R"(ndfbake — normal-map NDF filtering (Han et al. 2007)
+
+usage:
+  ndfbake bake INPUT --out DIR [options]   fit vMF lobes per MIP texel, write lobe EXRs + report.json
+  ndfbake synth PATTERN --size N [--height H] [--seed S] --out FILE
+                                           write a synthetic tileable normal map
+                                           (vgroove, bumps, fbm, brushed, scratches, weave)
+  ndfbake info FILE                        describe an image and its ndfbake attributes
+  ndfbake --help | --version
+
+bake options:
+  --max-lobes N        most vMF lobes per texel, 1..8 (default 4)
+  --tolerance T        stop adding lobes once the texel's relative effective-BRDF error is
+                       at most T (default 0.05); 0 always uses --max-lobes
+  --brdf SPEC          base BRDF the tolerance is measured with: ggx:ROUGHNESS (Blender's
+                       roughness, default ggx:0.5), blinn-phong:EXPONENT, or lambert
+  --convention C       opengl (+Y, Blender) or directx (-Y) input (default opengl)
+  --wrap W             repeat (tiling texture, default) or clamp
+  --srgb P             data (default: an sRGB tag is ignored, values are the normal) or linearize
+  --color FILE         base-colour image of the same size: also write per-lobe colour EXRs
+  --precision P        half (default) or float EXR pixels
+  --no-align           fit texels independently (no lobe alignment across texels and levels)
+  --threads N          worker threads (default: all cores)
+  --quiet              no progress output
+
+Exit status: 0 on success; 1 bad usage; 2 bad input; 3 cannot write output; 4 other failure;
+130 interrupted (no output is left behind).
+)";
+
+volatile std::sig_atomic_t g_interrupted = 0;
+void on_interrupt(int) { g_interrupted = 1; }
+
+struct Args {
+    std::vector<std::string> positional;
+    std::vector<std::pair<std::string, std::string>> options;  // name → value ("" for flags)
+};
+
+bool is_flag(const std::string& name) { return name == "--no-align" || name == "--quiet"; }
+
+bool parse_args(int argc, char** argv, int first, Args& args, std::string& error)
+{
+    for (int i = first; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a.rfind("--", 0) != 0) {
+            args.positional.push_back(a);
+            continue;
+        }
+        if (is_flag(a)) {
+            args.options.emplace_back(a, "");
+            continue;
+        }
+        if (i + 1 >= argc) {
+            error = "option " + a + " needs a value";
+            return false;
+        }
+        args.options.emplace_back(a, argv[++i]);
+    }
+    return true;
+}
+
+int fail(int code, const std::string& message)
+{
+    std::fprintf(stderr, "ndfbake: %s\n", message.c_str());
+    return code;
+}
+
+int exit_code_for(ndfb_status status)
+{
+    switch (status) {
+    case NDFB_OK: return 0;
+    case NDFB_ERROR_INVALID_ARGUMENT: return 1;
+    case NDFB_ERROR_FILE_NOT_FOUND:
+    case NDFB_ERROR_UNSUPPORTED_FORMAT:
+    case NDFB_ERROR_CORRUPT_FILE:
+    case NDFB_ERROR_OUT_OF_MEMORY: return 2;
+    case NDFB_ERROR_IO: return 3;
+    case NDFB_ERROR_CANCELLED: return 130;
+    default: return 4;
+    }
+}
+
+int fail_status(ndfb_context ctx, ndfb_status status)
+{
+    if (status == NDFB_ERROR_CANCELLED) return fail(130, "interrupted; no output was written");
+    return fail(exit_code_for(status), std::string(ndfb_status_name(status)) + ": " + ndfb_last_error(ctx));
+}
+
+bool parse_number(const std::string& text, double& out)
+{
+    char* end = nullptr;
+    out = std::strtod(text.c_str(), &end);
+    return !text.empty() && end && *end == '\0';
+}
+
+bool parse_brdf(const std::string& spec, ndfb_fit_options& fit)
+{
+    if (spec == "lambert") {
+        fit.brdf = NDFB_BRDF_LAMBERT;
+        return true;
+    }
+    const auto colon = spec.find(':');
+    double value = 0.0;
+    if (colon == std::string::npos || !parse_number(spec.substr(colon + 1), value)) return false;
+    const std::string name = spec.substr(0, colon);
+    if (name == "ggx") fit.brdf = NDFB_BRDF_GGX;
+    else if (name == "blinn-phong") fit.brdf = NDFB_BRDF_BLINN_PHONG;
+    else return false;
+    fit.brdf_parameter = float(value);
+    return true;
+}
+
+struct ProgressState {
+    bool quiet = false;
+    int last_percent = -1;
+    std::string last_stage;
+};
+
+int print_progress(void* user, const char* stage, float fraction)
+{
+    auto* state = static_cast<ProgressState*>(user);
+    if (!state->quiet) {
+        const int percent = int(fraction * 100.0f);
+        if (percent != state->last_percent || state->last_stage != stage) {
+            std::fprintf(stderr, "\r%-8s %3d%%", stage, percent);
+            if (percent >= 100) std::fputc('\n', stderr);
+            std::fflush(stderr);
+            state->last_percent = percent;
+            state->last_stage = stage;
+        }
+    }
+    return g_interrupted ? 1 : 0;
+}
+
+int run_bake(ndfb_context ctx, const Args& args)
+{
+    if (args.positional.size() != 1) return fail(1, "bake needs exactly one INPUT (see --help)");
+    ndfb_decode_options decode;
+    ndfb_fit_options fit;
+    ndfb_write_options write;
+    ndfb_decode_options_init(&decode);
+    ndfb_fit_options_init(&fit);
+    ndfb_write_options_init(&write);
+    std::string out_dir, color;
+    ProgressState progress;
+    for (const auto& [name, value] : args.options) {
+        double number = 0.0;
+        const bool numeric = parse_number(value, number);
+        if (name == "--out") out_dir = value;
+        else if (name == "--max-lobes" && numeric && number >= 0 && number == double(int(number))) fit.max_lobes = uint32_t(number);
+        else if (name == "--tolerance" && numeric) fit.tolerance = float(number);
+        else if (name == "--threads" && numeric && number >= 0) fit.threads = uint32_t(number);
+        else if (name == "--brdf" && parse_brdf(value, fit)) {}
+        else if (name == "--convention" && (value == "opengl" || value == "directx"))
+            decode.convention = value == "opengl" ? NDFB_CONVENTION_OPENGL : NDFB_CONVENTION_DIRECTX;
+        else if (name == "--wrap" && (value == "repeat" || value == "clamp"))
+            fit.wrap = value == "repeat" ? NDFB_WRAP_REPEAT : NDFB_WRAP_CLAMP;
+        else if (name == "--srgb" && (value == "data" || value == "linearize"))
+            decode.srgb = value == "data" ? NDFB_SRGB_AS_DATA : NDFB_SRGB_LINEARIZE;
+        else if (name == "--precision" && (value == "half" || value == "float"))
+            write.precision = value == "half" ? NDFB_PRECISION_HALF : NDFB_PRECISION_FLOAT;
+        else if (name == "--color") color = value;
+        else if (name == "--no-align") fit.align = 0;
+        else if (name == "--quiet") progress.quiet = true;
+        else return fail(1, "bad option " + name + (value.empty() ? "" : " " + value) + " (see --help)");
+    }
+    if (out_dir.empty()) return fail(1, "bake needs --out DIR");
+    if (!color.empty()) write.color_path = color.c_str();
+    fit.progress = print_progress;
+    fit.progress_user = &progress;
+
+    std::signal(SIGINT, on_interrupt);
+    std::signal(SIGTERM, on_interrupt);
+    const ndfb_status status = ndfb_bake(ctx, args.positional[0].c_str(), out_dir.c_str(), &decode, &fit, &write);
+    if (!progress.quiet && progress.last_percent >= 0 && progress.last_percent < 100) std::fputc('\n', stderr);
+    if (status != NDFB_OK) return fail_status(ctx, status);
+    std::printf("wrote %s/report.json and the lobe textures\n", out_dir.c_str());
+    return 0;
+}
+
+int run_synth(ndfb_context ctx, const Args& args)
+{
+    if (args.positional.size() != 1) return fail(1, "synth needs exactly one PATTERN (see --help)");
+    double width = 256, height = -1, seed = 1;
+    std::string out;
+    for (const auto& [name, value] : args.options) {
+        double number = 0.0;
+        const bool numeric = parse_number(value, number);
+        if (name == "--out") out = value;
+        else if (name == "--size" && numeric) width = number;
+        else if (name == "--height" && numeric) height = number;
+        else if (name == "--seed" && numeric && number >= 0) seed = number;
+        else return fail(1, "bad option " + name + " " + value + " (see --help)");
+    }
+    if (out.empty()) return fail(1, "synth needs --out FILE");
+    if (height < 0) height = width;
+    if (!(width >= 1 && height >= 1 && width <= 16384 && height <= 16384))
+        return fail(1, "--size and --height must be 1..16384");
+    ndfb_normal_map map = nullptr;
+    ndfb_status status = ndfb_synthesize(ctx, args.positional[0].c_str(), uint32_t(width), uint32_t(height),
+                                         uint32_t(seed), &map);
+    if (status == NDFB_OK) status = ndfb_normal_map_save(ctx, map, out.c_str());
+    ndfb_normal_map_destroy(map);
+    if (status != NDFB_OK) return fail_status(ctx, status);
+    return 0;
+}
+
+int run_info(ndfb_context ctx, const Args& args)
+{
+    if (args.positional.size() != 1 || !args.options.empty()) return fail(1, "info takes exactly one FILE");
+    size_t length = 0;
+    ndfb_status status = ndfb_describe_image(ctx, args.positional[0].c_str(), nullptr, 0, &length);
+    if (status != NDFB_OK) return fail_status(ctx, status);
+    std::string text(length + 1, '\0');
+    status = ndfb_describe_image(ctx, args.positional[0].c_str(), text.data(), text.size(), nullptr);
+    if (status != NDFB_OK) return fail_status(ctx, status);
+    std::fputs(text.c_str(), stdout);
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv)
+{
+    if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help")) {
+        std::fputs(kUsage, argc < 2 ? stderr : stdout);
+        return argc < 2 ? 1 : 0;
+    }
+    if (!std::strcmp(argv[1], "--version")) {
+        std::printf("ndfbake %s\n", ndfb_version());
+        return 0;
+    }
+    Args args;
+    std::string error;
+    if (!parse_args(argc, argv, 2, args, error)) return fail(1, error);
+
+    ndfb_context ctx = nullptr;
+    if (ndfb_context_create(&ctx) != NDFB_OK) return fail(4, ndfb_last_error(nullptr));
+    int code;
+    const std::string command = argv[1];
+    if (command == "bake") code = run_bake(ctx, args);
+    else if (command == "synth") code = run_synth(ctx, args);
+    else if (command == "info") code = run_info(ctx, args);
+    else code = fail(1, "unknown command '" + command + "' (see --help)");
+    ndfb_context_destroy(ctx);
+    return code;
+}
