@@ -182,9 +182,11 @@ class IoTest : public ::testing::Test {
 protected:
     void SetUp() override
     {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        dir_ = fs::path(::testing::TempDir()) / ("ndfbake_io_" + std::string(info->name()) + "_" +
-                                                 std::to_string(::getpid()));
+        // Parameterized test names contain '/'.
+        std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+        std::replace(name.begin(), name.end(), '/', '_');
+        dir_ = fs::path(::testing::TempDir()) /
+               ("ndfbake_io_" + name + "_" + std::to_string(::getpid()));
         fs::remove_all(dir_);
         fs::create_directories(dir_);
     }
@@ -313,7 +315,8 @@ TEST_F(IoTest, EightBitQuantizationIsNotCountedAsRepair)
         // The stored vectors really are off unit length by more than float noise.
         float worst = 0.0f;
         for (size_t i = 0; i < codes.size(); i += 3) {
-            const Vec3 n{codes[i] / 127.5f - 1, codes[i + 1] / 127.5f - 1, codes[i + 2] / 127.5f - 1};
+            const Vec3 n{codes[i] / 127.5f - 1.0f, codes[i + 1] / 127.5f - 1.0f,
+                         codes[i + 2] / 127.5f - 1.0f};
             worst = std::max(worst, std::abs(length(n) - 1.0f));
         }
         EXPECT_GT(worst, 0.004f);
@@ -409,7 +412,8 @@ TEST_F(IoTest, SrgbTaggedPngIsRawDataUnlessLinearizeIsAsked)
     EXPECT_TRUE(srgb.srgb_tagged);
     EXPECT_FALSE(linear.srgb_tagged);
     expect_identical(srgb.map.normals, linear.map.normals);
-    EXPECT_TRUE(has_assumption(srgb, "8-bit sRGB-tagged PNG: values taken as raw data, not linearized"));
+    EXPECT_TRUE(
+        has_assumption(srgb, "8-bit sRGB-tagged PNG: values taken as raw data, not linearized"));
     EXPECT_FALSE(has_assumption(linear, "sRGB"));
 
     DecodeOptions linearize;

@@ -28,12 +28,7 @@ void texel_reference_samples(const NormalMap& map, WrapMode wrap, int level, int
                              std::vector<WeightedNormal>& out)
 {
     gather_footprint(map, level, x, y, wrap, out);
-    if (sample_cap <= 0 || int(out.size()) <= sample_cap) return;
-    std::vector<WeightedNormal> strided;
-    strided.reserve(static_cast<size_t>(sample_cap));
-    const double stride = double(out.size()) / sample_cap;
-    for (int i = 0; i < sample_cap; ++i) strided.push_back(out[size_t(i * stride)]);
-    out = std::move(strided);
+    subsample_footprint(out, sample_cap);
 }
 
 LevelStats measure_level(const LobePyramid& pyramid, int level, const BaseBrdf& brdf,

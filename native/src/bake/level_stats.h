@@ -12,7 +12,7 @@
 namespace ndfbake {
 
 // Texels measured per level by reports, and fine normals per texel (a stride through the
-// footprint): the exact reference costs normals × directions, and these bounds keep a report of
+// footprint, see subsample_footprint): the exact reference costs normals × directions, and these bounds keep a report of
 // a 4096² map to seconds. Tests that need every texel pass 0 (no limit).
 inline constexpr int kReportTexelsPerLevel = 64;
 inline constexpr int kReportSampleCap = 1024;
@@ -33,7 +33,7 @@ struct LevelStats {
     ErrorSummary toksvig;
 };
 
-// The exact-reference samples of one texel: its footprint, strided down to `sample_cap` (0: all).
+// The exact-reference samples of one texel: its footprint, subsampled to `sample_cap` (0: all).
 void texel_reference_samples(const NormalMap& map, WrapMode wrap, int level, int x, int y, int sample_cap,
                              std::vector<WeightedNormal>& out);
 

@@ -1,7 +1,5 @@
 #include "io/image_read.h"
 
-#include <algorithm>
-#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -18,12 +16,14 @@ namespace ndfbake {
 namespace {
 
 // OpenImageIO's messages can span several lines; an Error message is one line.
-std::string one_line(std::string text)
+std::string one_line(const std::string& text)
 {
-    std::replace(text.begin(), text.end(), '\n', ' ');
-    while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back())))
-        text.pop_back();
-    return text;
+    std::vector<std::string> lines;
+    for (const std::string& line : OIIO::Strutil::splits(text, "\n")) {
+        if (!OIIO::Strutil::strip(line).empty())
+            lines.push_back(line);
+    }
+    return OIIO::Strutil::join(lines, "; ");
 }
 
 // Extensions of every format this OpenImageIO build reads ("png:png;tiff:tif,tiff;...").
@@ -32,10 +32,11 @@ const std::set<std::string>& known_extensions()
 {
     static const std::set<std::string> extensions = [] {
         std::set<std::string> result;
-        for (const std::string& format : OIIO::Strutil::splits(OIIO::get_string_attribute("extension_list"), ";")) {
-            const std::vector<std::string> name_and_extensions = OIIO::Strutil::splits(format, ":");
-            if (name_and_extensions.size() == 2) {
-                for (const std::string& ext : OIIO::Strutil::splits(name_and_extensions[1], ","))
+        const std::string list = OIIO::get_string_attribute("extension_list");
+        for (const std::string& format : OIIO::Strutil::splits(list, ";")) {
+            const std::vector<std::string> name_and_list = OIIO::Strutil::splits(format, ":");
+            if (name_and_list.size() == 2) {
+                for (const std::string& ext : OIIO::Strutil::splits(name_and_list[1], ","))
                     result.insert(ext);
             }
         }
@@ -94,7 +95,9 @@ std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path)
         return in;
     const std::string detail = OIIO::geterror();
     if (has_known_image_extension(path))
-        throw_read_error(Status::corrupt_file, path, "damaged or not the format its extension says",
+        throw_read_error(Status::corrupt_file, path,
+                         "damaged, or not really a " +
+                             std::filesystem::path(path).extension().string() + " file",
                          detail);
     throw_read_error(Status::unsupported_format, path, "not an image format OpenImageIO can read",
                      detail);

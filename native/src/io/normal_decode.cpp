@@ -39,7 +39,7 @@ uint64_t hash_file(const std::string& path)
         file.read(buffer.data(), std::streamsize(buffer.size()));
         hash.add(buffer.data(), size_t(file.gcount()));
     }
-    if (file.bad())
+    if (!file.is_open() || file.bad())
         throw_read_error(Status::io_error, path, "read failed while hashing the file");
     return hash.value();
 }
@@ -124,13 +124,15 @@ bool has_signed_samples(const std::vector<float>& samples, int channels)
     return false;
 }
 
+// Read in the file's own integer type, not float: the exact codes are what make DirectX twins
+// and 16/32-bit values decode without a second rounding.
 template <typename T>
-NormalMap decode_unsigned(OIIO::ImageInput& in, const std::string& path, OIIO::TypeDesc type,
-                          Convention convention, bool linearize)
+NormalMap decode_unsigned(OIIO::ImageInput& in, const std::string& path, Convention convention,
+                          bool linearize)
 {
     const OIIO::ImageSpec& spec = in.spec();
     std::vector<T> samples(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
-    read_all_pixels(in, path, type, samples.data());
+    read_all_pixels(in, path, OIIO::TypeDescFromC<T>::value(), samples.data());
     const double max_code = double(std::numeric_limits<T>::max());
     return assemble_normals(samples.data(), spec.width, spec.height, spec.nchannels, convention,
                             [&](T code) { return code_to_component(code, max_code, linearize); });
@@ -237,9 +239,9 @@ DecodeResult decode_normal_map(const std::string& path, const DecodeOptions& opt
     const OIIO::ImageSpec& spec = in->spec();
     const std::string context = "cannot read '" + path + "'";
     if (spec.width <= 0 || spec.height <= 0)
-        throw Error(Status::corrupt_file, context + ": header gives no pixels (" +
+        throw Error(Status::corrupt_file, context + ": header gives a size of " +
                                               std::to_string(spec.width) + " x " +
-                                              std::to_string(spec.height) + ")");
+                                              std::to_string(spec.height) + " pixels");
     if (spec.depth > 1)
         throw Error(Status::unsupported_format, context + ": volume images are not normal maps");
     check_channels(spec.nchannels, context);
@@ -257,16 +259,13 @@ DecodeResult decode_normal_map(const std::string& path, const DecodeOptions& opt
     const bool linearize = result.srgb_tagged && options.srgb == SrgbPolicy::linearize;
     switch (spec.format.basetype) {
     case OIIO::TypeDesc::UINT8:
-        result.map = decode_unsigned<uint8_t>(*in, path, OIIO::TypeDesc::UINT8, options.convention,
-                                              linearize);
+        result.map = decode_unsigned<uint8_t>(*in, path, options.convention, linearize);
         break;
     case OIIO::TypeDesc::UINT16:
-        result.map = decode_unsigned<uint16_t>(*in, path, OIIO::TypeDesc::UINT16,
-                                               options.convention, linearize);
+        result.map = decode_unsigned<uint16_t>(*in, path, options.convention, linearize);
         break;
     case OIIO::TypeDesc::UINT32:
-        result.map = decode_unsigned<uint32_t>(*in, path, OIIO::TypeDesc::UINT32,
-                                               options.convention, linearize);
+        result.map = decode_unsigned<uint32_t>(*in, path, options.convention, linearize);
         break;
     case OIIO::TypeDesc::HALF:
     case OIIO::TypeDesc::FLOAT:

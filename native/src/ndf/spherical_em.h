@@ -11,7 +11,7 @@ namespace ndfbake {
 
 struct EmSettings {
     int max_iterations = 20;     // §7.1: "we seldom need more than 10 iterations"
-    double convergence = 1e-5;   // stop when the mean log-likelihood moves less than this
+    double convergence = 1e-7;   // stop when the mean log-likelihood moves less than this
 };
 
 struct EmResult {

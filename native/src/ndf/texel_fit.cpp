@@ -26,6 +26,22 @@ void prune_dead_lobes(std::vector<VmfLobe>& lobes)
         for (VmfLobe& l : lobes) l.alpha /= total;
 }
 
+// EM from two starts, keeping the likelier: the finer level's lobes (§7.1), and the fine normals
+// farthest apart. Measured on the synthetic patterns, neither start wins everywhere: the
+// children's lobes are steadier across neighbours, the fine normals escape the children's
+// outlier lobes (fbm at level 6: 0.154 against 0.092 relative error for 4 lobes).
+std::vector<VmfLobe> fit_from_two_starts(std::span<const WeightedNormal> samples,
+                                         std::span<const VmfLobe> child_lobes, int count, const EmSettings& em)
+{
+    std::vector<VmfLobe> from_children = farthest_point_seeds(child_lobes, samples, count);
+    std::vector<VmfLobe> from_samples = farthest_point_seeds({}, samples, count);
+    const double children_fit = fit_vmf_mixture(samples, from_children, em).mean_log_likelihood;
+    const double samples_fit = fit_vmf_mixture(samples, from_samples, em).mean_log_likelihood;
+    std::vector<VmfLobe>& best = children_fit >= samples_fit ? from_children : from_samples;
+    prune_dead_lobes(best);
+    return std::move(best);
+}
+
 }  // namespace
 
 std::vector<VmfLobe> farthest_point_seeds(std::span<const VmfLobe> candidates,
@@ -79,11 +95,9 @@ TexelFit fit_texel(std::span<const WeightedNormal> samples, std::span<const VmfL
 
     // Without a budget, go straight to the most lobes the samples support.
     for (int count = budgeted ? 2 : max_lobes; count <= max_lobes; ++count) {
-        std::vector<VmfLobe> lobes = farthest_point_seeds(child_lobes, samples, count);
-        if (int(lobes.size()) < count && count > 1 && budgeted) break;  // no more distinct directions
+        std::vector<VmfLobe> lobes = fit_from_two_starts(samples, child_lobes, count, settings.em);
+        if (int(lobes.size()) < count && budgeted) break;  // no more distinct directions
         if (lobes.size() <= 1) break;
-        fit_vmf_mixture(samples, lobes, settings.em);
-        prune_dead_lobes(lobes);
         if (!budgeted) {
             best.lobes = std::move(lobes);
             break;

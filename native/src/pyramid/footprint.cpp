@@ -65,4 +65,19 @@ void gather_footprint(const NormalMap& map, int level, int x, int y, WrapMode wr
             out.push_back({map.at(column.index, row.index), float(row.multiplicity * column.multiplicity)});
 }
 
+void subsample_footprint(std::vector<WeightedNormal>& samples, int cap)
+{
+    if (cap <= 0 || samples.size() <= size_t(cap)) return;
+    constexpr double kGoldenFraction = 0.6180339887498949;
+    std::vector<WeightedNormal> kept;
+    kept.reserve(size_t(cap));
+    double position = 0.5;
+    for (int i = 0; i < cap; ++i) {
+        kept.push_back(samples[size_t(position * double(samples.size()))]);
+        position += kGoldenFraction;
+        if (position >= 1.0) position -= 1.0;
+    }
+    samples = std::move(kept);
+}
+
 }  // namespace ndfbake

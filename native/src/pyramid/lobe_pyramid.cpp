@@ -12,18 +12,6 @@ namespace {
 
 VmfLobe level0_lobe(const Vec3& n) { return {1.0f, n, kKappaMax}; }
 
-// Deterministic stride through a footprint so that large texels are scored on a bounded number
-// of normals spread over the whole footprint.
-std::span<const WeightedNormal> subsample(std::span<const WeightedNormal> samples, int cap,
-                                          std::vector<WeightedNormal>& storage)
-{
-    if (cap <= 0 || int(samples.size()) <= cap) return samples;
-    storage.clear();
-    const double stride = double(samples.size()) / cap;
-    for (int i = 0; i < cap; ++i) storage.push_back(samples[size_t(i * stride)]);
-    return storage;
-}
-
 void store_texel(LobeLevel& level, int slots, int x, int y, std::vector<VmfLobe> lobes, float error)
 {
     std::sort(lobes.begin(), lobes.end(), [](const VmfLobe& a, const VmfLobe& b) { return a.alpha > b.alpha; });
@@ -102,8 +90,9 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
                     }
                 TexelFit fit;
                 if (budgeted) {
-                    const TexelErrorMeter meter(subsample(samples, settings.budget_sample_cap, scored),
-                                                settings.brdf, budget_directions);
+                    scored = samples;
+                    subsample_footprint(scored, settings.budget_sample_cap);
+                    const TexelErrorMeter meter(scored, settings.brdf, budget_directions);
                     fit = fit_texel(samples, children, settings.fit, &meter);
                 } else {
                     fit = fit_texel(samples, children, settings.fit, nullptr);
