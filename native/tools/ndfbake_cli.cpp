@@ -183,8 +183,12 @@ int run_bake(ndfb_context ctx, const Args& args)
     std::signal(SIGINT, on_interrupt);
     std::signal(SIGTERM, on_interrupt);
     const ndfb_status status = ndfb_bake(ctx, args.positional[0].c_str(), out_dir.c_str(), &decode, &fit, &write);
-    if (!progress.quiet && progress.last_percent >= 0 && progress.last_percent < 100) std::fputc('\n', stderr);
-    if (status != NDFB_OK) return fail_status(ctx, status);
+    if (status != NDFB_OK) {
+        // Wipe an unfinished progress line so the reason stands on a line of its own.
+        if (!progress.quiet && progress.last_percent >= 0 && progress.last_percent < 100)
+            std::fputs("\r              \r", stderr);
+        return fail_status(ctx, status);
+    }
     std::printf("wrote %s/report.json and the lobe textures\n", out_dir.c_str());
     return 0;
 }

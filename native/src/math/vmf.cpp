@@ -65,7 +65,9 @@ void vmf_legendre_coefficients(double kappa, int lmax, double* out)
     // Ratios ρ_l = I_{l+1/2}/I_{l−1/2} from the continued fraction ρ_l = 1/((2l+1)/κ + ρ_{l+1}),
     // run downwards from far above lmax (Miller): upward recurrence loses all digits for small κ.
     const double k = std::max(kappa, double(kKappaMin));
-    const int start = lmax + 40 + int(std::sqrt(k));
+    // The fraction only settles where (2l+1)/κ ≳ 1, so start beyond κ: a start below it
+    // oscillates between two wrong ratios instead of converging.
+    const int start = lmax + 40 + int(std::min(k, double(kKappaMax)));
     double rho = 0.0;
     std::vector<double> ratios(size_t(lmax) + 1, 0.0);
     for (int l = start; l >= 1; --l) {

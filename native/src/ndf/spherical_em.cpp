@@ -124,6 +124,12 @@ EmResult fit_vmf_mixture(std::span<const WeightedNormal> samples, std::vector<Vm
             lobe.mu = normalize_or(r + pull, lobe.mu);  // eq. 23; R → 0 keeps the old direction
         }
 
+        // A re-seeded lobe took weight out of thin air: keep Σα = 1.
+        float alpha_sum = 0.0f;
+        for (const VmfLobe& lobe : lobes) alpha_sum += lobe.alpha;
+        if (alpha_sum > 0.0f)
+            for (VmfLobe& lobe : lobes) lobe.alpha /= alpha_sum;
+
         const double change = result.mean_log_likelihood - previous;
         previous = result.mean_log_likelihood;
         if (std::abs(change) < settings.convergence * (1.0 + std::abs(previous))) break;

@@ -1,0 +1,278 @@
+// The C API and the command line end to end: files and attributes written, specific errors for
+// bad input with nothing left behind, cancellation, and DirectX input equal to its OpenGL twin.
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <cstdio>
+#include <fstream>
+#include <thread>
+
+#include "io/lobe_exr.h"
+#include "io/normal_encode.h"
+#include "ndfbake.h"
+#include "synth/patterns.h"
+#include "test_support.h"
+
+namespace ndfbake {
+namespace {
+
+class BakeApi : public testing_support::TempDirTest {
+protected:
+    void SetUp() override
+    {
+        TempDirTest::SetUp();
+        ASSERT_EQ(ndfb_context_create(&ctx_), NDFB_OK);
+        ndfb_decode_options_init(&decode_);
+        ndfb_fit_options_init(&fit_);
+        ndfb_write_options_init(&write_);
+    }
+    void TearDown() override
+    {
+        ndfb_context_destroy(ctx_);
+        TempDirTest::TearDown();
+    }
+    std::string synth_file(Pattern pattern, int w, int h, const std::string& name)
+    {
+        write_normal_map(path(name), synthesize(pattern, w, h));
+        return path(name);
+    }
+
+    ndfb_context ctx_ = nullptr;
+    ndfb_decode_options decode_;
+    ndfb_fit_options fit_;
+    ndfb_write_options write_;
+};
+
+TEST_F(BakeApi, WritesSelfDescribingLobeTexturesAndAReport)
+{
+    const std::string input = synth_file(Pattern::bumps, 32, 16, "bumps.png");
+    const std::string out = path("out");
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+    for (int level = 0; level < 6; ++level)
+        for (int lobe = 0; lobe < 4; ++lobe) {
+            char file[32];
+            std::snprintf(file, sizeof file, "/level%02d_lobe%d.exr", level, lobe);
+            const std::string name = out + file;
+            const ImageInfo info = read_image_info(name);
+            EXPECT_EQ(info.width, std::max(1, 32 >> level));
+            EXPECT_EQ(info.channels, 4);
+            EXPECT_EQ(info.pixel_type, "half");
+            bool found_level = false, found_lobe = false;
+            for (const auto& [key, value] : info.attributes) {
+                if (key == "ndfbake:level") { found_level = true; EXPECT_EQ(value, std::to_string(level)); }
+                if (key == "ndfbake:lobe") { found_lobe = true; EXPECT_EQ(value, std::to_string(lobe)); }
+            }
+            EXPECT_TRUE(found_level && found_lobe) << name;
+            int w = 0, h = 0;
+            for (float v : read_rgba_exr(name, w, h)) ASSERT_TRUE(std::isfinite(v));
+        }
+    std::ifstream report(out + "/report.json");
+    const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+    for (const char* key : {"\"levels\"", "\"lobe_histogram\"", "\"error_toksvig\"", "\"timings_seconds\"", "\"repairs\""})
+        EXPECT_NE(text.find(key), std::string::npos) << key;
+    // Only our files: no staging folder or temporary left.
+    for (const std::string& entry : listing(out)) EXPECT_EQ(entry.find(".ndfbake"), std::string::npos) << entry;
+}
+
+TEST_F(BakeApi, DirectXInputBakesExactlyLikeItsOpenGLTwin)
+{
+    NormalMap map = synthesize(Pattern::fbm, 16, 16);
+    write_normal_map(path("gl.png"), map);
+    for (Vec3& n : map.normals) n.y = -n.y;
+    write_normal_map(path("dx.png"), map);
+    ndfb_normal_map gl = nullptr, dx = nullptr;
+    ASSERT_EQ(ndfb_normal_map_load(ctx_, path("gl.png").c_str(), &decode_, &gl), NDFB_OK);
+    decode_.convention = NDFB_CONVENTION_DIRECTX;
+    ASSERT_EQ(ndfb_normal_map_load(ctx_, path("dx.png").c_str(), &decode_, &dx), NDFB_OK);
+    std::vector<float> a(16 * 16 * 3), b(16 * 16 * 3);
+    ASSERT_EQ(ndfb_normal_map_read(gl, a.data(), a.size()), NDFB_OK);
+    ASSERT_EQ(ndfb_normal_map_read(dx, b.data(), b.size()), NDFB_OK);
+    EXPECT_EQ(a, b);
+    ndfb_normal_map_destroy(gl);
+    ndfb_normal_map_destroy(dx);
+}
+
+TEST_F(BakeApi, NanAndZeroPixelsAreRepairedCountedAndFitFinite)
+{
+    std::vector<float> pixels(4 * 4 * 3, 0.0f);  // signed encoding: all zero-length
+    pixels[3] = std::nanf("");
+    pixels[6] = 0.0f, pixels[7] = 0.0f, pixels[8] = -1.0f;  // below the horizon
+    ndfb_normal_map map = nullptr;
+    ASSERT_EQ(ndfb_normal_map_from_pixels(ctx_, pixels.data(), pixels.size(), 4, 4, 3, 1, &decode_, &map), NDFB_OK);
+    ndfb_repairs repairs{};
+    ASSERT_EQ(ndfb_normal_map_repairs(map, &repairs), NDFB_OK);
+    EXPECT_EQ(repairs.non_finite, 1u);
+    EXPECT_EQ(repairs.below_horizon, 1u);
+    EXPECT_EQ(repairs.zero_length, 14u);
+    ndfb_pyramid pyramid = nullptr;
+    ASSERT_EQ(ndfb_fit(ctx_, map, &fit_, &pyramid), NDFB_OK);
+    for (uint32_t level = 0; level < ndfb_pyramid_level_count(pyramid); ++level) {
+        uint32_t w = 0, h = 0;
+        ndfb_pyramid_level_size(pyramid, level, &w, &h);
+        std::vector<float> rgba(size_t(w) * h * 4);
+        for (uint32_t lobe = 0; lobe < ndfb_pyramid_lobe_slots(pyramid); ++lobe) {
+            ASSERT_EQ(ndfb_pyramid_read_lobe(pyramid, level, lobe, rgba.data(), rgba.size()), NDFB_OK);
+            for (float v : rgba) ASSERT_TRUE(std::isfinite(v));
+        }
+    }
+    ndfb_pyramid_destroy(pyramid);
+    ndfb_normal_map_destroy(map);
+}
+
+struct BadInput {
+    const char* name;
+    std::string contents;  // written to the input file unless `missing`
+    bool missing;
+    ndfb_status expected;
+};
+
+TEST_F(BakeApi, BadInputsGetSpecificErrorsAndLeaveNoOutput)
+{
+    const std::string good_png = synth_file(Pattern::fbm, 16, 16, "good.png");
+    std::ifstream in(good_png, std::ios::binary);
+    const std::string png((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const BadInput cases[] = {
+        {"missing.png", "", true, NDFB_ERROR_FILE_NOT_FOUND},
+        {"empty.png", "", false, NDFB_ERROR_CORRUPT_FILE},
+        {"corrupt.png", std::string(200, '\x5a'), false, NDFB_ERROR_CORRUPT_FILE},
+        {"truncated.png", png.substr(0, png.size() / 2), false, NDFB_ERROR_CORRUPT_FILE},
+        {"notes.txt", "not an image", false, NDFB_ERROR_UNSUPPORTED_FORMAT},
+    };
+    for (const BadInput& c : cases) {
+        const std::string input = path(c.name), out = path(std::string("out-") + c.name);
+        if (!c.missing) std::ofstream(input, std::ios::binary) << c.contents;
+        const ndfb_status status = ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_);
+        EXPECT_EQ(status, c.expected) << c.name << ": " << ndfb_last_error(ctx_);
+        EXPECT_NE(std::string(ndfb_last_error(ctx_)).find(c.name), std::string::npos) << ndfb_last_error(ctx_);
+        EXPECT_TRUE(listing(out).empty()) << c.name;
+    }
+    // An output folder that cannot exist (under a regular file): an i/o error, before any work.
+    const std::string out = good_png + "/out";
+    EXPECT_EQ(ndfb_bake(ctx_, good_png.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_ERROR_IO);
+    EXPECT_NE(std::string(ndfb_last_error(ctx_)).find("not writable"), std::string::npos) << ndfb_last_error(ctx_);
+}
+
+TEST_F(BakeApi, OptionsOutOfRangeAreRejected)
+{
+    const std::string input = synth_file(Pattern::fbm, 8, 8, "in.png");
+    auto bake_with = [&](auto change) {
+        ndfb_fit_options fit;
+        ndfb_fit_options_init(&fit);
+        change(fit);
+        return ndfb_bake(ctx_, input.c_str(), path("out").c_str(), &decode_, &fit, &write_);
+    };
+    EXPECT_EQ(bake_with([](ndfb_fit_options& f) { f.max_lobes = 0; }), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(bake_with([](ndfb_fit_options& f) { f.max_lobes = 1000; }), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(bake_with([](ndfb_fit_options& f) { f.tolerance = -0.1f; }), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(bake_with([](ndfb_fit_options& f) { f.brdf_parameter = 7.0f; }), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(bake_with([](ndfb_fit_options& f) { f.struct_size = 0; }), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_TRUE(listing(path("out")).empty());
+}
+
+TEST_F(BakeApi, CancelLeavesAnEarlierBakeUntouched)
+{
+    const std::string input = synth_file(Pattern::weave, 64, 64, "weave.png");
+    const std::string out = path("out");
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_OK);
+    const auto before = listing(out);
+    std::ifstream report_before(out + "/report.json");
+    const std::string text_before((std::istreambuf_iterator<char>(report_before)), std::istreambuf_iterator<char>());
+
+    for (const char* cancel_at : {"fit", "measure", "write"}) {
+        fit_.progress = +[](void* user, const char* stage, float) -> int { return std::strcmp(stage, static_cast<const char*>(user)) == 0 ? 1 : 0; };
+        fit_.progress_user = const_cast<char*>(cancel_at);
+        fit_.max_lobes = 3;  // a different bake, so a partial commit would show
+        EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_ERROR_CANCELLED) << cancel_at;
+        EXPECT_EQ(listing(out), before) << cancel_at;
+        std::ifstream report_after(out + "/report.json");
+        EXPECT_EQ(std::string((std::istreambuf_iterator<char>(report_after)), std::istreambuf_iterator<char>()), text_before);
+    }
+}
+
+TEST_F(BakeApi, NullHandlesAndMismatchedSizesAreErrorsNotCrashes)
+{
+    EXPECT_EQ(ndfb_context_create(nullptr), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(ndfb_last_error(nullptr)), "");
+    ndfb_normal_map map = nullptr;
+    EXPECT_EQ(ndfb_normal_map_load(ctx_, nullptr, &decode_, &map), NDFB_ERROR_INVALID_ARGUMENT);
+    float pixels[12] = {};
+    EXPECT_EQ(ndfb_normal_map_from_pixels(ctx_, pixels, 12, 3, 3, 3, 0, &decode_, &map), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(ndfb_fit(ctx_, nullptr, &fit_, nullptr), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(ndfb_pyramid_read_lobe(nullptr, 0, 0, pixels, 4), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(ndfb_pyramid_level_count(nullptr), 0u);
+}
+
+// ---- the command line ----------------------------------------------------------------------
+
+struct CliResult {
+    int exit_code;
+    std::string err;
+};
+
+CliResult run_cli(const std::string& args, const std::string& err_file)
+{
+    const std::string command = std::string(NDFBAKE_CLI_PATH) + " " + args + " >/dev/null 2>" + err_file;
+    const int status = std::system(command.c_str());
+    std::ifstream in(err_file);
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1,
+            std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>())};
+}
+
+TEST_F(BakeApi, CommandLineReportsFailuresInOneLineWithAnExitCode)
+{
+    const std::string err = path("stderr.txt");
+    EXPECT_EQ(run_cli("--help", err).exit_code, 0);
+    EXPECT_EQ(run_cli("synth weave --size 32 --out " + path("w.png"), err).exit_code, 0);
+    EXPECT_EQ(run_cli("bake " + path("w.png") + " --out " + path("out") + " --quiet", err).exit_code, 0);
+    EXPECT_EQ(run_cli("info " + path("out/level01_lobe0.exr"), err).exit_code, 0);
+
+    CliResult r = run_cli("bake " + path("nope.png") + " --out " + path("out2"), err);
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("file not found"), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    r = run_cli("bake " + path("w.png") + " --out " + path("w.png") + "/x", err);
+    EXPECT_EQ(r.exit_code, 3) << r.err;
+    r = run_cli("bake " + path("w.png") + " --out " + path("o") + " --max-lobes 9", err);
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    r = run_cli("frobnicate", err);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_FALSE(std::filesystem::exists(path("out2")) && !listing(path("out2")).empty());
+}
+
+TEST_F(BakeApi, InterruptingALargeBakeLeavesNoFiles)
+{
+    const std::string input = path("big.png"), out = path("out");
+    ASSERT_EQ(run_cli("synth fbm --size 2048 --out " + input, path("synth.err")).exit_code, 0);
+    const std::string err = path("bake.err");
+    const pid_t child = fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+        freopen(err.c_str(), "w", stderr);
+        execl(NDFBAKE_CLI_PATH, NDFBAKE_CLI_PATH, "bake", input.c_str(), "--out", out.c_str(), nullptr);
+        _exit(127);
+    }
+    // Wait until it reports fitting progress, then interrupt it as Ctrl-C would.
+    bool fitting = false;
+    for (int i = 0; i < 600 && !fitting; ++i) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        std::ifstream in(err);
+        fitting = std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()).find("fit") !=
+                  std::string::npos;
+    }
+    EXPECT_TRUE(fitting) << "no progress was printed";
+    kill(child, SIGINT);
+    int status = 0;
+    waitpid(child, &status, 0);
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 130);
+    EXPECT_TRUE(listing(out).empty());
+}
+
+}  // namespace
+}  // namespace ndfbake

@@ -1,0 +1,297 @@
+// Spherical EM, the lobe budget, footprints and the pyramid: hard cases and accuracy against the
+// exact effective BRDF (Han 2007 eq. 4), never against stored numbers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "bake/level_stats.h"
+#include "math/sphere.h"
+#include "ndf/moments.h"
+#include "ndf/texel_fit.h"
+#include "pyramid/lobe_pyramid.h"
+#include "synth/patterns.h"
+
+namespace ndfbake {
+namespace {
+
+std::vector<WeightedNormal> unit_samples(const std::vector<Vec3>& normals)
+{
+    std::vector<WeightedNormal> s;
+    for (const Vec3& n : normals) s.push_back({normalize_or(n, {0, 0, 1}), 1.0f});
+    return s;
+}
+
+void expect_valid_lobes(std::span<const VmfLobe> lobes)
+{
+    for (const VmfLobe& l : lobes) {
+        if (l.alpha == 0.0f) continue;
+        EXPECT_TRUE(std::isfinite(l.alpha) && l.alpha > 0.0f && l.alpha <= 1.0f);
+        EXPECT_NEAR(length(l.mu), 1.0f, 1e-4f);
+        EXPECT_GE(l.kappa, kKappaMin);
+        EXPECT_LE(l.kappa, kKappaMax);
+    }
+}
+
+// Draws from a vMF about +Z (Wood 1994, exact for S²), then rotates +Z onto mu.
+Vec3 sample_vmf(std::mt19937& rng, const Vec3& mu, float kappa)
+{
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const double xi = u(rng);
+    const double w = 1.0 + std::log(xi + (1.0 - xi) * std::exp(-2.0 * kappa)) / kappa;
+    const double phi = 2.0 * 3.141592653589793 * u(rng), s = std::sqrt(std::max(0.0, 1.0 - w * w));
+    const Vec3 t = normalize_or(cross(std::abs(mu.x) < 0.9f ? Vec3{1, 0, 0} : Vec3{0, 1, 0}, mu), {1, 0, 0});
+    const Vec3 b = cross(mu, t);
+    return normalize_or(float(s * std::cos(phi)) * t + float(s * std::sin(phi)) * b + float(w) * mu, mu);
+}
+
+TEST(SphericalEm, AllNormalsEqualGiveOneSaturatedLobe)
+{
+    const auto samples = unit_samples(std::vector<Vec3>(64, Vec3{0.3f, -0.2f, 0.93f}));
+    const BaseBrdf brdf = BaseBrdf::blinn_phong(64.0f);
+    const auto dirs = fibonacci_hemisphere(error_direction_count(brdf));
+    const TexelErrorMeter meter(samples, brdf, dirs);
+    const TexelFit fit = fit_texel(samples, {}, TexelFitSettings{}, &meter);
+    ASSERT_EQ(fit.lobes.size(), 1u);
+    EXPECT_EQ(fit.lobes[0].kappa, kKappaMax);
+    EXPECT_LT(fit.error, 0.01f);
+    expect_valid_lobes(fit.lobes);
+    // Without a budget there is still only one distinct direction to seed from.
+    EXPECT_EQ(fit_texel(samples, {}, {4, 0.0f, {}}, nullptr).lobes.size(), 1u);
+}
+
+TEST(SphericalEm, AntipodalNormalsCancelForOneLobeAndSplitForTwo)
+{
+    const auto samples = unit_samples({{0, 0, 1}, {0, 0, -1}});
+    const VmfLobe one = single_vmf_lobe(samples);
+    EXPECT_EQ(one.kappa, kKappaMin);  // R = 0: uniform, with a defined direction
+    expect_valid_lobes(std::span(&one, 1));
+
+    std::vector<VmfLobe> two = farthest_point_seeds({}, samples, 2);
+    ASSERT_EQ(two.size(), 2u);
+    fit_vmf_mixture(samples, two, EmSettings{});
+    expect_valid_lobes(two);
+    EXPECT_NEAR(two[0].alpha, 0.5f, 1e-4f);
+    EXPECT_NEAR(std::abs(two[0].mu.z), 1.0f, 1e-4f);
+    EXPECT_NEAR(dot(two[0].mu, two[1].mu), -1.0f, 1e-4f);
+    EXPECT_EQ(two[0].kappa, kKappaMax);
+}
+
+TEST(SphericalEm, HorizonNormalsStayFinite)
+{
+    const auto samples = unit_samples({{1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}, {0.7071f, 0.7071f, 0}});
+    for (int j = 1; j <= 4; ++j) {
+        const TexelFit fit = fit_texel(samples, {}, {j, 0.0f, {}}, nullptr);
+        expect_valid_lobes(fit.lobes);
+    }
+    const BaseBrdf brdf = BaseBrdf::ggx(0.5f);
+    const auto dirs = fibonacci_hemisphere(error_direction_count(brdf));
+    const TexelErrorMeter meter(samples, brdf, dirs);
+    EXPECT_TRUE(std::isfinite(meter.error(fit_texel(samples, {}, {4, 0.0f, {}}, nullptr).lobes)));
+}
+
+TEST(SphericalEm, RecoversAKnownTwoLobeMixture)
+{
+    std::mt19937 rng(7);
+    const Vec3 a = normalize_or({0.5f, 0.0f, 0.8f}, {}), b = normalize_or({-0.3f, 0.4f, 0.8f}, {});
+    std::vector<Vec3> normals;
+    for (int i = 0; i < 3000; ++i) normals.push_back(sample_vmf(rng, a, 80.0f));
+    for (int i = 0; i < 1000; ++i) normals.push_back(sample_vmf(rng, b, 200.0f));
+    const auto samples = unit_samples(normals);
+    std::vector<VmfLobe> lobes = farthest_point_seeds({}, samples, 2);
+    fit_vmf_mixture(samples, lobes, {200, 1e-9});
+    if (lobes[0].alpha < lobes[1].alpha) std::swap(lobes[0], lobes[1]);
+    EXPECT_NEAR(lobes[0].alpha, 0.75f, 0.02f);
+    EXPECT_GT(dot(lobes[0].mu, a), std::cos(1.0f * 3.14159f / 180.0f));
+    EXPECT_GT(dot(lobes[1].mu, b), std::cos(1.0f * 3.14159f / 180.0f));
+    EXPECT_NEAR(lobes[0].kappa / 80.0f, 1.0f, 0.1f);
+    EXPECT_NEAR(lobes[1].kappa / 200.0f, 1.0f, 0.1f);
+}
+
+TEST(SphericalEm, DeadLobesArePrunedNotLeftAsNaN)
+{
+    // Four seeds for two distinct directions: the surplus lobes die and are removed.
+    std::vector<Vec3> normals(50, Vec3{0, 0, 1});
+    normals.resize(100, normalize_or({0.6f, 0, 0.8f}, {}));
+    const TexelFit fit = fit_texel(unit_samples(normals), {}, {4, 0.0f, {}}, nullptr);
+    EXPECT_LE(fit.lobes.size(), 2u);
+    float total = 0.0f;
+    for (const VmfLobe& l : fit.lobes) total += l.alpha;
+    EXPECT_NEAR(total, 1.0f, 1e-5f);
+    expect_valid_lobes(fit.lobes);
+}
+
+TEST(LobeBudget, AddsLobesOnlyWhileTheErrorIsAboveTolerance)
+{
+    const NormalMap map = synthesize(Pattern::vgroove, 16, 16);
+    std::vector<WeightedNormal> samples;
+    gather_footprint(map, 2, 0, 0, WrapMode::wrap, samples);
+    const BaseBrdf brdf = BaseBrdf::blinn_phong(32.0f);
+    const auto dirs = fibonacci_hemisphere(error_direction_count(brdf));
+    const TexelErrorMeter meter(samples, brdf, dirs);
+    const TexelFit loose = fit_texel(samples, {}, {4, 0.99f, {}}, &meter);
+    EXPECT_EQ(loose.lobes.size(), 1u);
+    const TexelFit tight = fit_texel(samples, {}, {4, 0.05f, {}}, &meter);
+    EXPECT_EQ(tight.lobes.size(), 2u);  // the groove's two facets, no more
+    EXPECT_LE(tight.error, 0.05f);
+}
+
+TEST(Footprint, LevelSizesForAnyShape)
+{
+    EXPECT_EQ(level_count(1, 1), 1);
+    EXPECT_EQ(level_count(1, 7), 4);
+    EXPECT_EQ(level_count(3, 5), 4);
+    EXPECT_EQ(level_count(4097, 3), 14);
+    EXPECT_EQ(level_size(3, 5, 1), (LevelSize{2, 3}));
+    EXPECT_EQ(level_size(4097, 3, 13), (LevelSize{1, 1}));
+    EXPECT_EQ(level_size(4097, 3, 2), (LevelSize{1025, 1}));
+}
+
+TEST(Footprint, EveryFineTexelIsCoveredOncePerLevel)
+{
+    for (auto [w, h] : {std::pair{3, 5}, {1, 7}, {16, 16}, {13, 2}}) {
+        NormalMap map;
+        map.width = w;
+        map.height = h;
+        for (int i = 0; i < w * h; ++i) map.normals.push_back({float(i), 0, 1});  // x tags the texel
+        for (int level = 0; level < level_count(w, h); ++level) {
+            for (WrapMode wrap : {WrapMode::clamp, WrapMode::wrap}) {
+                std::vector<double> weight(size_t(w * h), 0.0);
+                const LevelSize size = level_size(w, h, level);
+                std::vector<WeightedNormal> samples;
+                double total = 0.0;
+                for (int y = 0; y < size.height; ++y)
+                    for (int x = 0; x < size.width; ++x) {
+                        gather_footprint(map, level, x, y, wrap, samples);
+                        double texel = 0.0;
+                        for (const auto& s : samples) { weight[size_t(s.n.x)] += s.weight; texel += s.weight; }
+                        if (wrap == WrapMode::wrap) EXPECT_EQ(texel, double(int64_t(1) << (2 * level)));
+                        total += texel;
+                    }
+                if (wrap == WrapMode::clamp)
+                    for (double c : weight) EXPECT_EQ(c, 1.0) << w << "x" << h << " level " << level;
+                else
+                    EXPECT_EQ(total, double(size.width) * size.height * double(int64_t(1) << (2 * level)));
+            }
+        }
+    }
+}
+
+class PyramidHardCases : public ::testing::TestWithParam<std::pair<int, int>> {};
+
+TEST_P(PyramidHardCases, EveryLevelIsFiniteWithKappaInBounds)
+{
+    const auto [w, h] = GetParam();
+    NormalMap map = synthesize(Pattern::weave, w, h);
+    // Plant the worst pixels a decoder can hand over: antipodal neighbours and the horizon.
+    map.normals[0] = {0, 0, 1};
+    if (map.normals.size() > 1) map.normals[1] = {1, 0, 0};
+    if (map.normals.size() > 2) map.normals[2] = {-1, 0, 0};
+    for (WrapMode wrap : {WrapMode::wrap, WrapMode::clamp}) {
+        PyramidSettings settings;
+        settings.wrap = wrap;
+        settings.align = true;
+        settings.alignment_strength = 0.25f;  // exercise eq. 23 as well
+        const LobePyramid pyramid = build_lobe_pyramid(map, settings, {});
+        ASSERT_EQ(pyramid.level_count(), level_count(w, h));
+        EXPECT_EQ(pyramid.size(pyramid.level_count() - 1), (LevelSize{1, 1}));
+        for (int level = 0; level < pyramid.level_count(); ++level) {
+            const LevelSize size = pyramid.size(level);
+            std::vector<VmfLobe> lobes(static_cast<size_t>(pyramid.slots));
+            for (int y = 0; y < size.height; ++y)
+                for (int x = 0; x < size.width; ++x) {
+                    pyramid.texel(level, x, y, lobes);
+                    expect_valid_lobes(lobes);
+                    float total = 0.0f;
+                    for (const auto& l : lobes) total += l.alpha;
+                    ASSERT_NEAR(total, 1.0f, 1e-4f) << level << " " << x << "," << y;
+                }
+        }
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Sizes, PyramidHardCases,
+                         ::testing::Values(std::pair{1, 1}, std::pair{1, 9}, std::pair{3, 5}, std::pair{4097, 3},
+                                           std::pair{64, 64}));
+
+TEST(PyramidAlignment, AveragedLevelZeroTexturesApproximateTheCoarseFit)
+{
+    // What EEVEE does with our level-0 lobe textures: box-average α and α·r per slot. With aligned
+    // slots the averaged lobes must describe the coarse texel better than without. (Measured at
+    // 0.46 against 0.52 relative error on the weave: alignment helps, but hardware-averaged lobes
+    // stay far from the per-level fit; see the README's open problems.)
+    const NormalMap map = synthesize(Pattern::weave, 64, 64);
+    const BaseBrdf brdf = BaseBrdf::blinn_phong(32.0f);
+    const auto dirs = fibonacci_hemisphere(error_direction_count(brdf));
+    double error[2] = {0.0, 0.0};
+    for (int aligned = 0; aligned < 2; ++aligned) {
+        PyramidSettings settings;
+        settings.align = aligned == 1;
+        settings.fit.tolerance = 0.0f;
+        const LobePyramid pyramid = build_lobe_pyramid(map, settings, {});
+        const int level = 3, span = 8;
+        const LevelSize size = pyramid.size(level);
+        std::vector<VmfLobe> lobes(static_cast<size_t>(pyramid.slots));
+        for (int ty = 0; ty < size.height; ++ty)
+            for (int tx = 0; tx < size.width; ++tx) {
+                std::vector<double> alpha(static_cast<size_t>(pyramid.slots), 0.0);
+                std::vector<Vec3d> sum(static_cast<size_t>(pyramid.slots));
+                for (int y = ty * span; y < (ty + 1) * span; ++y)
+                    for (int x = tx * span; x < (tx + 1) * span; ++x) {
+                        pyramid.texel(0, x, y, lobes);
+                        for (size_t j = 0; j < lobes.size(); ++j) {
+                            alpha[j] += lobes[j].alpha;
+                            sum[j].add(lobes[j].mu, lobes[j].alpha * resultant_from_kappa(lobes[j].kappa));
+                        }
+                    }
+                std::vector<VmfLobe> averaged;
+                for (size_t j = 0; j < lobes.size(); ++j) {
+                    if (alpha[j] <= 0.0) continue;
+                    const Vec3 r = sum[j].to_float() / float(alpha[j]);
+                    averaged.push_back({float(alpha[j] / (span * span)), normalize_or(r, {0, 0, 1}),
+                                        kappa_from_resultant(length(r))});
+                }
+                std::vector<WeightedNormal> samples;
+                gather_footprint(map, level, tx, ty, WrapMode::wrap, samples);
+                error[aligned] += TexelErrorMeter(samples, brdf, dirs).error(averaged) / (size.width * size.height);
+            }
+    }
+    std::printf("hardware-averaged level-3 error: unaligned %.3f, aligned %.3f\n", error[0], error[1]);
+    EXPECT_LT(error[1], 0.95 * error[0]);
+}
+
+// Acceptance: 4 lobes beat one vMF lobe and Toksvig on every pattern at levels 2, 4, 6 with
+// Blinn-Phong 32 and 128, and average at most a fifth of Toksvig's error.
+TEST(FitAccuracy, FourLobesBeatSingleLobeAndToksvigOnEveryPattern)
+{
+    constexpr int kSize = 256;
+    double mixture_total = 0.0, toksvig_total = 0.0;
+    int cases = 0;
+    for (Pattern pattern : all_patterns()) {
+        const NormalMap map = synthesize(pattern, kSize, kSize);
+        PyramidSettings settings;
+        settings.fit.tolerance = 0.0f;  // the 4-lobe fit
+        const LobePyramid pyramid = build_lobe_pyramid(map, settings, {});
+        for (float exponent : {32.0f, 128.0f}) {
+            for (int level : {2, 4, 6}) {
+                const LevelStats stats = measure_level(pyramid, level, BaseBrdf::blinn_phong(exponent),
+                                                       settings.fit, 16, 0, false);
+                std::printf("%-9s s=%-4g level %d: 4 lobes %.3f  single vMF %.3f  Toksvig %.3f\n",
+                            pattern_name(pattern), exponent, level, stats.fit.mean, stats.single_vmf.mean,
+                            stats.toksvig.mean);
+                EXPECT_LT(stats.fit.mean, stats.single_vmf.mean) << pattern_name(pattern) << " " << exponent << " " << level;
+                EXPECT_LT(stats.fit.mean, stats.toksvig.mean) << pattern_name(pattern) << " " << exponent << " " << level;
+                mixture_total += stats.fit.mean;
+                toksvig_total += stats.toksvig.mean;
+                ++cases;
+            }
+        }
+    }
+    std::printf("mean over %d cases: 4 lobes %.4f, Toksvig %.4f, ratio %.3f\n", cases, mixture_total / cases,
+                toksvig_total / cases, mixture_total / toksvig_total);
+    EXPECT_LE(mixture_total, toksvig_total / 5.0);
+}
+
+}  // namespace
+}  // namespace ndfbake
