@@ -1,4 +1,6 @@
 // The `ndfbake` command line: a client of the public C API, like the Blender add-on.
+#include <unistd.h>
+
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -123,6 +125,7 @@ bool parse_brdf(const std::string& spec, ndfb_fit_options& fit)
 
 struct ProgressState {
     bool quiet = false;
+    bool terminal = false;  // redraw one line in place; logs get a line per 10%
     int last_percent = -1;
     std::string last_stage;
 };
@@ -131,10 +134,15 @@ int print_progress(void* user, const char* stage, float fraction)
 {
     auto* state = static_cast<ProgressState*>(user);
     if (!state->quiet) {
-        const int percent = int(fraction * 100.0f);
+        const int step = state->terminal ? 1 : 10;
+        const int percent = int(fraction * 100.0f) / step * step;
         if (percent != state->last_percent || state->last_stage != stage) {
-            std::fprintf(stderr, "\r%-8s %3d%%", stage, percent);
-            if (percent >= 100) std::fputc('\n', stderr);
+            if (state->terminal) {
+                std::fprintf(stderr, "\r%-8s %3d%%", stage, percent);
+                if (percent >= 100) std::fputc('\n', stderr);
+            } else {
+                std::fprintf(stderr, "%s %d%%\n", stage, percent);
+            }
             std::fflush(stderr);
             state->last_percent = percent;
             state->last_stage = stage;
@@ -177,6 +185,7 @@ int run_bake(ndfb_context ctx, const Args& args)
     }
     if (out_dir.empty()) return fail(1, "bake needs --out DIR");
     if (!color.empty()) write.color_path = color.c_str();
+    progress.terminal = isatty(fileno(stderr)) != 0;
     fit.progress = print_progress;
     fit.progress_user = &progress;
 
@@ -185,7 +194,7 @@ int run_bake(ndfb_context ctx, const Args& args)
     const ndfb_status status = ndfb_bake(ctx, args.positional[0].c_str(), out_dir.c_str(), &decode, &fit, &write);
     if (status != NDFB_OK) {
         // Wipe an unfinished progress line so the reason stands on a line of its own.
-        if (!progress.quiet && progress.last_percent >= 0 && progress.last_percent < 100)
+        if (!progress.quiet && progress.terminal && progress.last_percent >= 0 && progress.last_percent < 100)
             std::fputs("\r              \r", stderr);
         return fail_status(ctx, status);
     }

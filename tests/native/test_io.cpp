@@ -10,6 +10,7 @@
 #include <fstream>
 #include <limits>
 #include <stdexcept>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -233,6 +234,12 @@ struct FormatCase {
     bool float_data;
     float tolerance;  // max component error against the reference normals
 };
+
+// Names the case in test output (ctest lists it) instead of dumping its bytes.
+void PrintTo(const FormatCase& c, std::ostream* os)
+{
+    *os << c.extension << " " << c.file_type.c_str() << " " << c.channels << "ch";
+}
 
 class DecodeFormatTest : public IoTest, public ::testing::WithParamInterface<FormatCase> {};
 

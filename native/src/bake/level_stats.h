@@ -15,7 +15,7 @@ namespace ndfbake {
 // footprint, see subsample_footprint): the exact reference costs normals × directions, and these bounds keep a report of
 // a 4096² map to seconds. Tests that need every texel pass 0 (no limit).
 inline constexpr int kReportTexelsPerLevel = 64;
-inline constexpr int kReportSampleCap = 1024;
+inline constexpr int kReportSampleCap = 256;
 
 struct ErrorSummary {
     float mean = 0.0f;

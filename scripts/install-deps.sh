@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Installs what ndfbake needs on Debian 12 from Debian's own packages. Run as root (or via sudo).
+set -euo pipefail
+packages=(build-essential cmake pkg-config libopenimageio-dev libopenexr-dev openimageio-tools
+          libgtest-dev python3)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
