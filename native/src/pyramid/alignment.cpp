@@ -1,6 +1,8 @@
 #include "pyramid/alignment.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <vector>
 
 namespace ndfbake {
@@ -16,6 +18,23 @@ float slot_score(const VmfLobe& lobe, int slot, std::span<const VmfLobe> parent,
     if (!parent.empty()) score += parent[size_t(slot)].alpha * dot(lobe.mu, parent[size_t(slot)].mu);
     if (!left.empty()) score += left[size_t(slot)].alpha * dot(lobe.mu, left[size_t(slot)].mu);
     return score;
+}
+
+// The E-step's argmax: the lobe most responsible for n under a mixture.
+int most_responsible_slot(std::span<const VmfLobe> mixture, const Vec3& n)
+{
+    int best_slot = 0;
+    float best = -std::numeric_limits<float>::infinity();
+    for (size_t s = 0; s < mixture.size(); ++s) {
+        if (!(mixture[s].alpha > 0.0f)) continue;
+        const float log_p = std::log(mixture[s].alpha) +
+                            log_vmf_density(mixture[s], n, float(log_vmf_normalizer_shifted(mixture[s].kappa)));
+        if (log_p > best) {
+            best = log_p;
+            best_slot = int(s);
+        }
+    }
+    return best_slot;
 }
 
 }  // namespace
@@ -67,6 +86,7 @@ void align_lobe_slots(LobePyramid& pyramid, const PyramidSettings& settings, con
         const int rows_here = level.size.height;
         parallel_rows(rows_here, settings.threads, [&](int y) {
             std::vector<VmfLobe> parent(static_cast<size_t>(slots)), left(static_cast<size_t>(slots)), current(static_cast<size_t>(slots));
+            std::vector<VmfLobe> ancestor(static_cast<size_t>(slots));
             std::vector<WeightedNormal> samples;
             for (int x = 0; x < width; ++x) {
                 pyramid.texel(l + 1, x / 2, y / 2, parent);
@@ -77,10 +97,8 @@ void align_lobe_slots(LobePyramid& pyramid, const PyramidSettings& settings, con
                 }
                 const size_t t = size_t(y) * size_t(width) + size_t(x);
                 if (l == 0) {
-                    const VmfLobe lobe{1.0f, pyramid.source.normals[t], kKappaMax};
-                    int slot = 0;
-                    assign_slots(std::span(&lobe, 1), parent, left_span, std::span(&slot, 1));
-                    level.level0_slot[t] = uint8_t(slot);
+                    pyramid.texel(top, x >> top, y >> top, ancestor);
+                    level.level0_slot[t] = uint8_t(most_responsible_slot(ancestor, pyramid.source.normals[t]));
                     continue;
                 }
                 std::vector<VmfLobe> lobes = pyramid.texel_lobes(l, x, y);
