@@ -125,6 +125,46 @@ TEST_F(BakeApi, NanAndZeroPixelsAreRepairedCountedAndFitFinite)
     ndfb_normal_map_destroy(map);
 }
 
+TEST_F(BakeApi, PerLobeColourFollowsTheNormalsItBelongsTo)
+{
+    // A V-groove whose facets tilted towards +X are red and the others blue (linear float EXR,
+    // so no sRGB decoding is involved): every lobe must carry the colour of its facet (eq. 22).
+    const NormalMap map = synthesize(Pattern::vgroove, 16, 16);
+    write_normal_map(path("groove.png"), map);
+    std::vector<float> rgba(map.normals.size() * 4);
+    for (size_t i = 0; i < map.normals.size(); ++i) {
+        const bool red = map.normals[i].x > 0.0f;
+        rgba[i * 4 + 0] = red ? 1.0f : 0.0f;
+        rgba[i * 4 + 2] = red ? 0.0f : 1.0f;
+        rgba[i * 4 + 3] = 1.0f;
+    }
+    write_rgba_exr(path("color.exr"), 16, 16, rgba.data(), PixelPrecision::single, {});
+    const std::string color = path("color.exr");
+    write_.color_path = color.c_str();
+    write_.precision = NDFB_PRECISION_FLOAT;
+    ASSERT_EQ(ndfb_bake(ctx_, path("groove.png").c_str(), path("out").c_str(), &decode_, &fit_, &write_), NDFB_OK)
+        << ndfb_last_error(ctx_);
+    int checked = 0;
+    for (int level = 1; level <= 3; ++level)
+        for (int lobe = 0; lobe < 4; ++lobe) {
+            char name[48];
+            std::snprintf(name, sizeof name, "/level%02d_", level);
+            int w = 0, h = 0;
+            const auto lobes = read_rgba_exr(path("out") + name + "lobe" + std::to_string(lobe) + ".exr", w, h);
+            const auto colors = read_rgba_exr(path("out") + name + "color" + std::to_string(lobe) + ".exr", w, h);
+            for (int t = 0; t < w * h; ++t) {
+                const float alpha = lobes[size_t(t) * 4];
+                EXPECT_NEAR(colors[size_t(t) * 4 + 3], alpha, 1e-5f);
+                if (alpha < 0.1f) continue;
+                const bool tilted_right = lobes[size_t(t) * 4 + 1] > 0.0f;  // α r_x
+                EXPECT_NEAR(colors[size_t(t) * 4 + 0] / alpha, tilted_right ? 1.0f : 0.0f, 1e-3f);
+                EXPECT_NEAR(colors[size_t(t) * 4 + 2] / alpha, tilted_right ? 0.0f : 1.0f, 1e-3f);
+                ++checked;
+            }
+        }
+    EXPECT_GT(checked, 40);
+}
+
 struct BadInput {
     const char* name;
     std::string contents;  // written to the input file unless `missing`
