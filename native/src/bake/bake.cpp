@@ -280,7 +280,7 @@ BakeOutcome write_pyramid(const LobePyramid& pyramid, const DecodeResult& decode
     for (int level = 0; level < pyramid.level_count(); ++level) {
         check_progress(progress, "measure", double(level) / pyramid.level_count());
         stats.push_back(measure_level(pyramid, level, settings.brdf, settings.fit, kReportTexelsPerLevel,
-                                      kReportSampleCap, settings.align));
+                                      kReportSampleCap, settings.align && settings.alignment_strength > 0.0f));
     }
     timings.measure = seconds_since(start);
 

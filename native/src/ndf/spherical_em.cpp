@@ -27,18 +27,26 @@ std::vector<LobeTerms> lobe_terms(std::span<const VmfLobe> lobes)
     return terms;
 }
 
-// log Σ_j α_j γ_j(n); fills log_p[j] = log α_j γ_j(n).
-float log_mixture_density(std::span<const VmfLobe> lobes, std::span<const LobeTerms> terms,
-                          const Vec3& n, float* log_p)
+// Returns log Σ_j α_j γ_j(n) and fills z[j] = α_j γ_j(n) / Σ_k α_k γ_k(n), the E-step's
+// responsibilities, from one exponential per lobe (shifted by the largest term: log-sum-exp).
+float responsibilities(std::span<const VmfLobe> lobes, std::span<const LobeTerms> terms, const Vec3& n, float* z)
 {
     float max_log = -std::numeric_limits<float>::infinity();
     for (size_t j = 0; j < lobes.size(); ++j) {
-        log_p[j] = terms[j].log_alpha + log_vmf_density(lobes[j], n, terms[j].log_norm_shifted);
-        max_log = std::max(max_log, log_p[j]);
+        z[j] = terms[j].log_alpha + log_vmf_density(lobes[j], n, terms[j].log_norm_shifted);
+        max_log = std::max(max_log, z[j]);
     }
-    if (!std::isfinite(max_log)) return max_log;
+    if (!std::isfinite(max_log)) {  // every lobe is dead: nobody is responsible
+        std::fill(z, z + lobes.size(), 0.0f);
+        return max_log;
+    }
     float sum = 0.0f;
-    for (size_t j = 0; j < lobes.size(); ++j) sum += std::exp(log_p[j] - max_log);
+    for (size_t j = 0; j < lobes.size(); ++j) {
+        z[j] = std::exp(z[j] - max_log);
+        sum += z[j];
+    }
+    const float inv_sum = 1.0f / sum;
+    for (size_t j = 0; j < lobes.size(); ++j) z[j] *= inv_sum;
     return max_log + std::log(sum);
 }
 
@@ -76,7 +84,7 @@ EmResult fit_vmf_mixture(std::span<const WeightedNormal> samples, std::vector<Vm
     std::vector<double> lobe_weight(J);
     std::vector<Vec3d> lobe_sum(J);
     std::vector<bool> reseeded(J, false);
-    std::vector<float> log_p(J);
+    std::vector<float> z(J);
     double previous = -std::numeric_limits<double>::infinity();
 
     for (int iteration = 0; iteration < settings.max_iterations; ++iteration) {
@@ -90,14 +98,14 @@ EmResult fit_vmf_mixture(std::span<const WeightedNormal> samples, std::vector<Vm
         // E-step (Algorithm 1 line 5, with α_j), accumulating the M-step's sums on the fly.
         for (size_t i = 0; i < samples.size(); ++i) {
             const WeightedNormal& s = samples[i];
-            const float lse = log_mixture_density(lobes, terms, s.n, log_p.data());
+            const float lse = responsibilities(lobes, terms, s.n, z.data());
             if (!std::isfinite(lse)) continue;
             log_likelihood += double(s.weight) * lse;
             if (lse < worst_log) { worst_log = lse; worst_sample = i; }
             for (size_t j = 0; j < J; ++j) {
-                const double z = double(s.weight) * std::exp(double(log_p[j] - lse));
-                lobe_weight[j] += z;
-                lobe_sum[j].add(s.n, z);
+                const double wz = double(s.weight) * z[j];
+                lobe_weight[j] += wz;
+                lobe_sum[j].add(s.n, wz);
             }
         }
         result.iterations = iteration + 1;
@@ -143,12 +151,7 @@ void vmf_responsibilities(std::span<const WeightedNormal> samples, std::span<con
     const size_t J = lobes.size();
     out.assign(samples.size() * J, 0.0f);
     const std::vector<LobeTerms> terms = lobe_terms(lobes);
-    std::vector<float> log_p(J);
-    for (size_t i = 0; i < samples.size(); ++i) {
-        const float lse = log_mixture_density(lobes, terms, samples[i].n, log_p.data());
-        if (!std::isfinite(lse)) continue;
-        for (size_t j = 0; j < J; ++j) out[i * J + j] = std::exp(log_p[j] - lse);
-    }
+    for (size_t i = 0; i < samples.size(); ++i) responsibilities(lobes, terms, samples[i].n, &out[i * J]);
 }
 
 }  // namespace ndfbake
