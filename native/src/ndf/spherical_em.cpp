@@ -54,20 +54,8 @@ float responsibilities(std::span<const VmfLobe> lobes, std::span<const LobeTerms
 
 VmfLobe single_vmf_lobe(std::span<const WeightedNormal> samples)
 {
-    Vec3d sum;
-    double total = 0.0;
-    for (const WeightedNormal& s : samples) {
-        sum.add(s.n, s.weight);
-        total += s.weight;
-    }
-    VmfLobe lobe;
-    lobe.alpha = 1.0f;
-    if (total <= 0.0) return lobe;
-    const double r = sum.length() / total;
-    lobe.kappa = kappa_from_resultant(r);
-    // Normals that cancel (R → 0) have no mean direction; the surface normal is the neutral one.
-    lobe.mu = normalize_or(sum.to_float(), Vec3{0.0f, 0.0f, 1.0f});
-    return lobe;
+    const MeanNormal mean = mean_normal(samples);
+    return {1.0f, mean.direction, kappa_from_resultant(mean.length)};
 }
 
 EmResult fit_vmf_mixture(std::span<const WeightedNormal> samples, std::vector<VmfLobe>& lobes,

@@ -1,6 +1,9 @@
 // The samples every NDF fit consumes: fine normals with a weight (footprint multiplicity).
 #pragma once
 
+#include <algorithm>
+#include <span>
+
 #include "math/vec3.h"
 
 namespace ndfbake {
@@ -9,5 +12,27 @@ struct WeightedNormal {
     Vec3 n;          // unit length
     float weight;    // > 0
 };
+
+// The weighted mean of the normals, split into its direction and its length R ∈ [0, 1] (the
+// mean resultant length every moment-based lobe is built from).
+struct MeanNormal {
+    Vec3 direction{0.0f, 0.0f, 1.0f};  // +Z, the neutral normal, when the normals cancel
+    double length = 0.0;
+};
+
+inline MeanNormal mean_normal(std::span<const WeightedNormal> samples)
+{
+    Vec3d sum;
+    double total = 0.0;
+    for (const WeightedNormal& s : samples) {
+        sum.add(s.n, s.weight);
+        total += s.weight;
+    }
+    MeanNormal mean;
+    if (total <= 0.0) return mean;
+    mean.length = std::min(1.0, sum.length() / total);
+    mean.direction = normalize_or(sum.to_float(), mean.direction);
+    return mean;
+}
 
 }  // namespace ndfbake
