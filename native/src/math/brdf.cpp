@@ -50,6 +50,14 @@ float ggx_distribution(float c, float alpha)
     return a2 * kInvPi / (d * d);
 }
 
+float beckmann_distribution(float c, float m)
+{
+    if (c <= 0.0f) return 0.0f;
+    const float c2 = c * c, m2 = m * m;
+    const float tan2 = (1.0f - c2) / c2;
+    return std::exp(-tan2 / m2) * kInvPi / (m2 * c2 * c2);
+}
+
 }  // namespace
 
 BaseBrdf BaseBrdf::lambert() { return BaseBrdf(BrdfKind::lambert, 0.0f); }
@@ -70,20 +78,29 @@ BaseBrdf BaseBrdf::ggx(float roughness)
     return BaseBrdf(BrdfKind::ggx, roughness);
 }
 
+BaseBrdf BaseBrdf::beckmann(float slope)
+{
+    if (!(slope >= kMinBeckmannSlope && slope <= kMaxBeckmannSlope))
+        throw Error(Status::invalid_argument, "Beckmann slope must be in [0.0001, 1], got " + std::to_string(slope));
+    return BaseBrdf(BrdfKind::beckmann, slope);
+}
+
 BaseBrdf BaseBrdf::parse(const std::string& text)
 {
     if (text == "lambert") return lambert();
     const auto colon = text.find(':');
     const std::string name = text.substr(0, colon);
-    if (colon != std::string::npos && (name == "blinn-phong" || name == "ggx")) {
+    if (colon != std::string::npos && (name == "blinn-phong" || name == "ggx" || name == "beckmann")) {
         const std::string value = text.substr(colon + 1);
         char* end = nullptr;
         const float parameter = std::strtof(value.c_str(), &end);
         if (!value.empty() && end && *end == '\0')
-            return name == "ggx" ? ggx(parameter) : blinn_phong(parameter);
+            if (name == "ggx") return ggx(parameter);
+            if (name == "beckmann") return beckmann(parameter);
+            return blinn_phong(parameter);
     }
     throw Error(Status::invalid_argument, "unknown BRDF '" + text +
-                                              "': expected lambert, blinn-phong:EXPONENT or ggx:ROUGHNESS");
+                                              "': expected lambert, blinn-phong:EXPONENT, ggx:ROUGHNESS or beckmann:SLOPE");
 }
 
 std::string BaseBrdf::to_string() const
@@ -93,6 +110,7 @@ std::string BaseBrdf::to_string() const
     case BrdfKind::lambert: return "lambert";
     case BrdfKind::blinn_phong: std::snprintf(buffer, sizeof buffer, "blinn-phong:%g", parameter_); break;
     case BrdfKind::ggx: std::snprintf(buffer, sizeof buffer, "ggx:%g", parameter_); break;
+    case BrdfKind::beckmann: std::snprintf(buffer, sizeof buffer, "beckmann:%g", parameter_); break;
     }
     return buffer;
 }
@@ -103,6 +121,7 @@ float BaseBrdf::eval(float c) const
     case BrdfKind::lambert: return std::max(c, 0.0f) * kInvPi;
     case BrdfKind::blinn_phong: return normalized_blinn_phong(c, parameter_);
     case BrdfKind::ggx: return ggx_distribution(c, parameter_ * parameter_);
+    case BrdfKind::beckmann: return beckmann_distribution(c, parameter_);
     }
     return 0.0f;
 }
@@ -125,10 +144,15 @@ ConvolvedLobe BaseBrdf::convolved(float kappa) const
         break;
     case BrdfKind::ggx: {
         const float alpha = parameter_ * parameter_;
-        // A lobe wider than α = 1 is beyond what Blender's roughness can express.
-        lobe.parameter_ = std::min(1.0f, std::sqrt(alpha * alpha + 2.0f / kappa));
+        // A lobe wider than α = 1 is beyond what Blender's roughness can express; the
+        // amplitude then carries the spread the width cannot.
+        lobe.parameter_ = std::min(1.0f, std::sqrt(alpha * alpha + kGgxVmfWidening / kappa));
+        lobe.amplitude_ = float(ggx_sphere_integral(alpha) / ggx_sphere_integral(lobe.parameter_));
         break;
     }
+    case BrdfKind::beckmann:
+        lobe.parameter_ = std::sqrt(parameter_ * parameter_ + 2.0f / kappa);  // eq. 21
+        break;
     }
     return lobe;
 }
@@ -149,9 +173,19 @@ float ConvolvedLobe::eval(float c) const
         return std::max(0.0f, sum * kInvPi);
     }
     case BrdfKind::blinn_phong: return normalized_blinn_phong(c, parameter_);
-    case BrdfKind::ggx: return ggx_distribution(c, parameter_);
+    case BrdfKind::ggx: return amplitude_ * ggx_distribution(c, parameter_);
+    case BrdfKind::beckmann: return beckmann_distribution(c, parameter_);
     }
     return 0.0f;
+}
+
+double BaseBrdf::ggx_sphere_integral(double alpha)
+{
+    // 2π ∫₀¹ D(c) dc = 1 + α² artanh(k)/k; the series artanh(k)/k = 1 + k²/3 + … near α = 1.
+    const double k2 = std::max(0.0, 1.0 - alpha * alpha);
+    const double k = std::sqrt(k2);
+    const double ratio = k < 1e-4 ? 1.0 + k2 / 3.0 : std::atanh(k) / k;
+    return 1.0 + alpha * alpha * ratio;
 }
 
 float BaseBrdf::angular_width() const
@@ -160,6 +194,7 @@ float BaseBrdf::angular_width() const
     case BrdfKind::lambert: return 1.0f;
     case BrdfKind::blinn_phong: return 1.0f / std::sqrt(parameter_);  // c^s ≈ exp(−s θ²/2)
     case BrdfKind::ggx: return parameter_ * parameter_;                // α: the slope scale
+    case BrdfKind::beckmann: return parameter_;                         // m: the RMS slope
     }
     return 1.0f;
 }
