@@ -27,9 +27,10 @@ std::vector<LobeTerms> lobe_terms(std::span<const VmfLobe> lobes)
     return terms;
 }
 
-// Returns log Σ_j α_j γ_j(n) and fills z[j] = α_j γ_j(n) / Σ_k α_k γ_k(n), the E-step's
+// Returns log Σ_j α_j γ_j(n) and fills z[j] ∝ (α_j γ_j(n))^sharpness, normalized: the E-step's
 // responsibilities, from one exponential per lobe (shifted by the largest term: log-sum-exp).
-float responsibilities(std::span<const VmfLobe> lobes, std::span<const LobeTerms> terms, const Vec3& n, float* z)
+float responsibilities(std::span<const VmfLobe> lobes, std::span<const LobeTerms> terms, const Vec3& n, float* z,
+                       float sharpness = 1.0f)
 {
     float max_log = -std::numeric_limits<float>::infinity();
     for (size_t j = 0; j < lobes.size(); ++j) {
@@ -40,12 +41,14 @@ float responsibilities(std::span<const VmfLobe> lobes, std::span<const LobeTerms
         std::fill(z, z + lobes.size(), 0.0f);
         return max_log;
     }
-    float sum = 0.0f;
+    float sum = 0.0f, sharp_sum = 0.0f;
     for (size_t j = 0; j < lobes.size(); ++j) {
-        z[j] = std::exp(z[j] - max_log);
-        sum += z[j];
+        const float shifted = z[j] - max_log;
+        sum += std::exp(shifted);
+        z[j] = sharpness == 1.0f ? std::exp(shifted) : std::exp(sharpness * shifted);
+        sharp_sum += z[j];
     }
-    const float inv_sum = 1.0f / sum;
+    const float inv_sum = 1.0f / sharp_sum;
     for (size_t j = 0; j < lobes.size(); ++j) z[j] *= inv_sum;
     return max_log + std::log(sum);
 }
@@ -86,7 +89,7 @@ EmResult fit_vmf_mixture(std::span<const WeightedNormal> samples, std::vector<Vm
         // E-step (Algorithm 1 line 5, with α_j), accumulating the M-step's sums on the fly.
         for (size_t i = 0; i < samples.size(); ++i) {
             const WeightedNormal& s = samples[i];
-            const float lse = responsibilities(lobes, terms, s.n, z.data());
+            const float lse = responsibilities(lobes, terms, s.n, z.data(), settings.summaries ? s.weight : 1.0f);
             if (!std::isfinite(lse)) continue;
             log_likelihood += double(s.weight) * lse;
             if (lse < worst_log) { worst_log = lse; worst_sample = i; }
@@ -105,7 +108,7 @@ EmResult fit_vmf_mixture(std::span<const WeightedNormal> samples, std::vector<Vm
             if (lobe_weight[j] < kDeadLobeSampleWeight * min_weight) {
                 if (!reseeded[j] && lobe.alpha > 0.0f) {
                     reseeded[j] = true;
-                    lobe.mu = samples[worst_sample].n;
+                    lobe.mu = normalize_or(samples[worst_sample].n, lobe.mu);
                     lobe.alpha = float(min_weight / total_weight);
                     previous = -std::numeric_limits<double>::infinity();  // the model changed
                 } else {

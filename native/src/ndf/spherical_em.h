@@ -12,6 +12,10 @@ namespace ndfbake {
 struct EmSettings {
     int max_iterations = 20;     // §7.1: "we seldom need more than 10 iterations"
     double convergence = 1e-7;   // stop when the mean log-likelihood moves less than this
+    // Samples are summaries of finer lobes (hierarchical EM, Vasconcelos & Lippman 1999): a
+    // summary of w normals is assigned as its w normals would be jointly, h_ij ∝ (α_j e^{E[log γ_j]})^w,
+    // which is all but a hard assignment. Off: every sample is one normal.
+    bool summaries = false;
 };
 
 struct EmResult {

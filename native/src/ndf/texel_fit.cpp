@@ -26,20 +26,46 @@ void prune_dead_lobes(std::vector<VmfLobe>& lobes)
         for (VmfLobe& l : lobes) l.alpha /= total;
 }
 
-// EM from two starts, keeping the likelier: the finer level's lobes (§7.1), and the fine normals
+// EM from the children's seeds, and with settings.two_starts also from the samples, keeping the
+// likelier: the finer level's lobes (§7.1), and the fine normals
 // farthest apart. Measured on the synthetic patterns, neither start wins everywhere: the
 // children's lobes are steadier across neighbours, the fine normals escape the children's
 // outlier lobes (fbm at level 6: 0.154 against 0.092 relative error for 4 lobes).
-std::vector<VmfLobe> fit_from_two_starts(std::span<const WeightedNormal> samples,
-                                         std::span<const VmfLobe> child_lobes, int count, const EmSettings& em)
+std::vector<VmfLobe> fit_from_seeds(std::span<const WeightedNormal> samples, std::span<const VmfLobe> child_lobes,
+                                    int count, const TexelFitSettings& settings)
 {
+    const EmSettings& em = settings.em;
     std::vector<VmfLobe> from_children = farthest_point_seeds(child_lobes, samples, count);
-    std::vector<VmfLobe> from_samples = farthest_point_seeds({}, samples, count);
     const double children_fit = fit_vmf_mixture(samples, from_children, em).mean_log_likelihood;
+    if (!settings.two_starts) {
+        prune_dead_lobes(from_children);
+        return from_children;
+    }
+    std::vector<VmfLobe> from_samples = farthest_point_seeds({}, samples, count);
     const double samples_fit = fit_vmf_mixture(samples, from_samples, em).mean_log_likelihood;
     std::vector<VmfLobe>& best = children_fit >= samples_fit ? from_children : from_samples;
     prune_dead_lobes(best);
     return std::move(best);
+}
+
+// No more samples than lobes: each distinct sample is a lobe, the maximum-likelihood fit that EM
+// would converge to, without running it.
+std::vector<VmfLobe> lobes_of_samples(std::span<const WeightedNormal> samples)
+{
+    std::vector<VmfLobe> lobes;
+    double total = 0.0;
+    for (const WeightedNormal& s : samples) total += s.weight;
+    for (const WeightedNormal& s : samples) {
+        const Vec3 mu = normalize_or(s.n, {0, 0, 1});
+        const float kappa = kappa_from_resultant(length(s.n));
+        const float alpha = float(s.weight / total);
+        auto same = std::find_if(lobes.begin(), lobes.end(), [&](const VmfLobe& l) {
+            return 1.0f - dot(l.mu, mu) < kDistinctSeedDistance && l.kappa == kappa;
+        });
+        if (same != lobes.end()) same->alpha += alpha;
+        else lobes.push_back({alpha, mu, kappa});
+    }
+    return lobes;
 }
 
 }  // namespace
@@ -56,7 +82,7 @@ std::vector<VmfLobe> farthest_point_seeds(std::span<const VmfLobe> candidates,
     for (const VmfLobe& c : candidates)
         if (c.alpha > 0.0f && (!heaviest || c.alpha > heaviest->alpha)) heaviest = &c;
     if (heaviest) add_seed(heaviest->mu, heaviest->kappa);
-    else if (!samples.empty()) add_seed(samples.front().n, kMaxSeedKappa);
+    else if (!samples.empty()) add_seed(normalize_or(samples.front().n, {0, 0, 1}), kMaxSeedKappa);
     else return seeds;
 
     while (int(seeds.size()) < count) {
@@ -76,7 +102,7 @@ std::vector<VmfLobe> farthest_point_seeds(std::span<const VmfLobe> candidates,
             if (d > best_distance) { best_distance = d; far_sample = &s; }
         }
         if (!far_sample) break;
-        add_seed(far_sample->n, seeds.front().kappa);
+        add_seed(normalize_or(far_sample->n, {0, 0, 1}), seeds.front().kappa);
     }
     for (VmfLobe& seed : seeds) seed.alpha = 1.0f / float(seeds.size());
     return seeds;
@@ -94,8 +120,13 @@ TexelFit fit_texel(std::span<const WeightedNormal> samples, std::span<const VmfL
     if (max_lobes == 1 || (budgeted && best.error <= settings.tolerance)) return best;
 
     // Without a budget, go straight to the most lobes the samples support.
+    if (!budgeted && int(samples.size()) <= max_lobes) {
+        best.lobes = lobes_of_samples(samples);
+        if (meter) best.error = meter->error(best.lobes);
+        return best;
+    }
     for (int count = budgeted ? 2 : max_lobes; count <= max_lobes; ++count) {
-        std::vector<VmfLobe> lobes = fit_from_two_starts(samples, child_lobes, count, settings.em);
+        std::vector<VmfLobe> lobes = fit_from_seeds(samples, child_lobes, count, settings);
         if (int(lobes.size()) < count && budgeted) break;  // no more distinct directions
         if (lobes.size() <= 1) break;
         if (!budgeted) {

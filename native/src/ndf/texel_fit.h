@@ -19,6 +19,9 @@ struct TexelFitSettings {
     int max_lobes = 4;        // 1..kMaxLobes
     float tolerance = 0.05f;  // relative effective-BRDF error; ≤ 0 always uses max_lobes
     EmSettings em;
+    // Also start EM from the farthest samples and keep the likelier fit (see fit_from_two_starts);
+    // off, only the finer level's lobes seed EM, as in §7.1.
+    bool two_starts = true;
 };
 
 struct TexelFit {

@@ -8,9 +8,12 @@
 
 namespace ndfbake {
 
+// A fine normal (unit n), or a summary of many: the mean resultant vector of a finer lobe's
+// normals (|n| ≤ 1). EM treats both alike, since a lobe's expected log-likelihood over a set of
+// normals depends on them only through their mean (log γ is linear in n).
 struct WeightedNormal {
-    Vec3 n;          // unit length
-    float weight;    // > 0
+    Vec3 n;
+    float weight;    // > 0: how many fine normals this stands for
 };
 
 // The weighted mean of the normals, split into its direction and its length R ∈ [0, 1] (the

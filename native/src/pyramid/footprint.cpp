@@ -65,6 +65,16 @@ void gather_footprint(const NormalMap& map, int level, int x, int y, WrapMode wr
             out.push_back({map.at(column.index, row.index), float(row.multiplicity * column.multiplicity)});
 }
 
+double footprint_weight(int width, int height, int level, int x, int y, WrapMode wrap)
+{
+    const int64_t span = int64_t(1) << level;
+    if (wrap == WrapMode::wrap) return double(span) * double(span);
+    const auto extent = [&](int extent, int i) {
+        return double(std::max<int64_t>(0, std::min<int64_t>(span, extent - int64_t(i) * span)));
+    };
+    return extent(width, x) * extent(height, y);
+}
+
 void subsample_footprint(std::vector<WeightedNormal>& samples, int cap)
 {
     if (cap <= 0 || samples.size() <= size_t(cap)) return;

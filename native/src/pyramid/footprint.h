@@ -31,6 +31,9 @@ LevelSize level_size(int width, int height, int level);
 void gather_footprint(const NormalMap& map, int level, int x, int y, WrapMode wrap,
                       std::vector<WeightedNormal>& out);
 
+// Σ of the weights gather_footprint would return for texel (x, y), without gathering.
+double footprint_weight(int width, int height, int level, int x, int y, WrapMode wrap);
+
 // Keeps at most `cap` of the gathered samples (cap ≤ 0: all), spread over the whole footprint by a
 // golden-ratio sequence: a plain stride would alias with periodic content (every 4th column of a
 // 2-texel V-groove is the same facet).

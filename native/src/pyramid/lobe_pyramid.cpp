@@ -76,26 +76,42 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
     for (int l = 1; l < levels; ++l) {
         LobeLevel& level = pyramid.levels[size_t(l)];
         const LobeLevel& finer = pyramid.levels[size_t(l - 1)];
+        const bool hierarchical = settings.method == FitMethod::hierarchical;
+        TexelFitSettings fit_settings = settings.fit;
+        if (hierarchical) {
+            // Summaries are assigned almost hard, so EM on them settles like k-means: one start
+            // from the children's lobes suffices.
+            fit_settings.em.summaries = true;
+            fit_settings.two_starts = false;
+        }
         parallel_rows(level.size.height, settings.threads, [&](int y) {
-            std::vector<WeightedNormal> samples, scored;
+            std::vector<WeightedNormal> samples, scored, summaries;
             std::vector<VmfLobe> children, child(static_cast<size_t>(slots));
             for (int x = 0; x < level.size.width; ++x) {
-                gather_footprint(map, l, x, y, settings.wrap, samples);
                 children.clear();
+                summaries.clear();
                 for (int cy = 2 * y; cy < std::min(2 * y + 2, finer.size.height); ++cy)
                     for (int cx = 2 * x; cx < std::min(2 * x + 2, finer.size.width); ++cx) {
                         pyramid.texel(l - 1, cx, cy, child);
-                        for (const VmfLobe& lobe : child)
-                            if (lobe.alpha > 0.0f) children.push_back(lobe);
+                        const double child_weight = footprint_weight(map.width, map.height, l - 1, cx, cy, settings.wrap);
+                        for (const VmfLobe& lobe : child) {
+                            if (!(lobe.alpha > 0.0f)) continue;
+                            children.push_back(lobe);
+                            summaries.push_back({float(resultant_from_kappa(lobe.kappa)) * lobe.mu,
+                                                 float(lobe.alpha * child_weight)});
+                        }
                     }
+                // The hierarchical fit still scores the budget on fine normals.
+                if (!hierarchical || budgeted) gather_footprint(map, l, x, y, settings.wrap, samples);
+                const std::span<const WeightedNormal> fit_samples = hierarchical ? summaries : samples;
                 TexelFit fit;
                 if (budgeted) {
                     scored = samples;
                     subsample_footprint(scored, settings.budget_sample_cap);
                     const TexelErrorMeter meter(scored, settings.brdf, budget_directions);
-                    fit = fit_texel(samples, children, settings.fit, &meter);
+                    fit = fit_texel(fit_samples, children, fit_settings, &meter);
                 } else {
-                    fit = fit_texel(samples, children, settings.fit, nullptr);
+                    fit = fit_texel(fit_samples, children, fit_settings, nullptr);
                 }
                 store_texel(level, slots, x, y, std::move(fit.lobes), fit.error);
             }
