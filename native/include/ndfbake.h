@@ -45,7 +45,12 @@ typedef enum ndfb_status {
 
 typedef enum ndfb_convention { NDFB_CONVENTION_OPENGL = 0, NDFB_CONVENTION_DIRECTX = 1 } ndfb_convention;
 typedef enum ndfb_wrap { NDFB_WRAP_REPEAT = 0, NDFB_WRAP_CLAMP = 1 } ndfb_wrap;
-typedef enum ndfb_brdf { NDFB_BRDF_GGX = 0, NDFB_BRDF_BLINN_PHONG = 1, NDFB_BRDF_LAMBERT = 2 } ndfb_brdf;
+typedef enum ndfb_brdf {
+    NDFB_BRDF_GGX = 0,         /* parameter: Blender roughness r, α = r² */
+    NDFB_BRDF_BLINN_PHONG = 1, /* parameter: exponent s */
+    NDFB_BRDF_LAMBERT = 2,
+    NDFB_BRDF_BECKMANN = 3     /* parameter: RMS slope m */
+} ndfb_brdf;
 typedef enum ndfb_precision { NDFB_PRECISION_HALF = 0, NDFB_PRECISION_FLOAT = 1 } ndfb_precision;
 typedef enum ndfb_srgb_policy {
     NDFB_SRGB_AS_DATA = 0,   /* sRGB-tagged files: raw values are the encoded normal (usual case) */
@@ -179,6 +184,152 @@ NDFB_API ndfb_status ndfb_pyramid_write(ndfb_context ctx, ndfb_pyramid pyramid, 
 NDFB_API ndfb_status ndfb_bake(ndfb_context ctx, const char* input_path, const char* out_dir,
                                const ndfb_decode_options* decode, const ndfb_fit_options* fit,
                                const ndfb_write_options* write);
+
+/* ---- benchmark ----------------------------------------------------------------------------- */
+typedef struct ndfb_bench_options {
+    uint32_t struct_size;
+    const char* const* map_paths;  /* normal maps to measure besides the synthetic patterns */
+    size_t map_count;
+    uint32_t synthetic_size;       /* side of the six synthetic patterns; 0 leaves them out */
+    const char* methods;           /* comma-separated (see `ndfbake bench --help`); NULL: all */
+    const char* brdfs;             /* comma-separated "ggx:R", "blinn-phong:S", …; NULL: ggx:0.3,ggx:0.6 */
+    const char* levels;            /* comma-separated MIP levels; NULL: 2,4,6 */
+    uint32_t texels_per_level;     /* measured texels per level; default 64 */
+    uint32_t threads;              /* 0: all cores */
+    ndfb_progress_fn progress;     /* stage: a line on the (map, method) just measured */
+    void* progress_user;
+} ndfb_bench_options;
+
+NDFB_API void ndfb_bench_options_init(ndfb_bench_options* options);
+/* Measures every representation (the default bake, 1..8 vMF lobes, the hierarchical fit, naive,
+ * Toksvig, LEAN, single vMF, Xu's partitions, SH orders 2..8) on the same footprints: build time,
+ * storage per texel, mean and 95th-percentile effective-BRDF error. Writes bench.csv, bench.md
+ * and per-level error heat maps (PNG) into out_dir. */
+NDFB_API ndfb_status ndfb_bench(ndfb_context ctx, const ndfb_bench_options* options, const char* out_dir);
+
+/* ---- tangent frames ------------------------------------------------------------------------ */
+/* MikkTSpace-compatible tangent frames (Mikkelsen 2008, §3), equal to what Blender's
+ * Mesh.calc_tangents() gives: quads split along the shorter UV diagonal, corners welded when
+ * position, normal and UV are bitwise equal, groups that never cross a mirror seam (UV winding),
+ * corner-angle weighted averages, degenerate triangles handled as MikkTSpace does.
+ *
+ * Meshes are passed as plain arrays in an ndfb_mesh (fill it with ndfb_mesh_init first):
+ * positions per vertex, faces as corner counts plus one vertex index per corner (faces one after
+ * another, counter-clockwise seen from the front), normals and UVs per corner (Blender: loop
+ * normals and the UV layer) or per vertex. Frames need the exact normals the renderer uses. The
+ * library keeps no pointer after a call returns. Non-finite values, indices out of range, empty
+ * meshes and sizes that do not add up are NDFB_ERROR_INVALID_ARGUMENT with a message naming the
+ * element. Frames are defined for triangles and quads only: a mesh with n-gons is refused
+ * (as calc_tangents does); ndfb_mesh_diagnose and ndfb_texel_density accept n-gons.
+ *
+ * Per corner the tangent array holds x, y, z, sign (Blender: loop.tangent, loop.bitangent_sign):
+ * a unit tangent perpendicular to the corner normal, and bitangent = sign * cross(normal, tangent).
+ * A corner no usable triangle reaches gets MikkTSpace's default (1, 0, 0), sign -1.
+ * threads: 0 uses every core; results do not depend on it. */
+typedef enum ndfb_domain { NDFB_PER_CORNER = 0, NDFB_PER_VERTEX = 1 } ndfb_domain;
+
+typedef struct ndfb_mesh {
+    uint32_t struct_size;
+    const float* positions;          /* vertex_count * 3 */
+    size_t vertex_count;
+    const uint32_t* face_sizes;      /* face_count entries, each >= 3 */
+    size_t face_count;
+    const uint32_t* corner_vertices; /* corner_count entries; corner_count = sum of face_sizes */
+    size_t corner_count;
+    const float* normals;            /* 3 per corner or per vertex (normal_domain) */
+    ndfb_domain normal_domain;       /* default NDFB_PER_CORNER */
+    const float* uvs;                /* 2 per corner or per vertex (uv_domain) */
+    ndfb_domain uv_domain;           /* default NDFB_PER_CORNER */
+} ndfb_mesh;
+
+NDFB_API void ndfb_mesh_init(ndfb_mesh* mesh);
+
+/* tangents: tangent_count = corner_count * 4. magnitudes (may be NULL with magnitude_count 0):
+ * corner_count * 2 floats, the world length per unit of U and of V at the corner (|dP/du|,
+ * |dP/dv|, averaged over the corner's group like the tangent). */
+NDFB_API ndfb_status ndfb_tangents(ndfb_context ctx, const ndfb_mesh* mesh, uint32_t threads, float* tangents,
+                                   size_t tangent_count, float* magnitudes, size_t magnitude_count);
+
+/* Mirroring-safe vertex splits: an indexed mesh for engines, where the corners of one input
+ * vertex share an output vertex only if normal, UV, tangent and sign are all equal, so a vertex is
+ * never welded across a mirror seam. tangents: as from ndfb_tangents (NULL: computed here).
+ * corner_to_vertex[corner_count] receives the output vertex of every corner; vertex_source
+ * (capacity >= corner_count entries) the input vertex of every output vertex. Output vertices are
+ * numbered by input vertex, so a mesh that needs no split keeps its numbering (minus unused
+ * vertices). Each extra copy of a vertex is counted once, under the first reason that applies in
+ * the order UV, normal, sign, tangent. */
+typedef struct ndfb_split_stats {
+    uint64_t input_vertices;  /* input vertices used by at least one corner */
+    uint64_t output_vertices;
+    uint64_t uv_seams;        /* copies made because the UVs differ */
+    uint64_t hard_edges;      /* ... same UV, different normals */
+    uint64_t mirror_seams;    /* ... same UV and normal, opposite bitangent sign */
+    uint64_t tangent_splits;  /* ... only the tangent differs (fan split by connectivity, quads) */
+} ndfb_split_stats;
+
+NDFB_API ndfb_status ndfb_split_vertices(ndfb_context ctx, const ndfb_mesh* mesh, const float* tangents,
+                                         size_t tangent_count, uint32_t threads, uint32_t* corner_to_vertex,
+                                         size_t corner_count, uint32_t* vertex_source, size_t capacity,
+                                         ndfb_split_stats* stats);
+
+/* UV texel density for level-of-detail selection: per face, sqrt(UV area / world area), i.e. UV
+ * units per world unit (times the texture's size in texels: texels per world unit). 0 for faces
+ * without world or UV area. mesh_density (may be NULL): the same over the whole mesh,
+ * sqrt(total UV area / total world area). */
+NDFB_API ndfb_status ndfb_texel_density(ndfb_context ctx, const ndfb_mesh* mesh, float* face_density,
+                                        size_t face_count, double* mesh_density);
+
+/* What in a mesh will make tangent frames, and so normal maps, go wrong, in counts a user can act
+ * on; the *_first fields name an example face (-1: none). UV islands are sets of triangles joined
+ * by edges whose two ends share position and UV. */
+typedef struct ndfb_mesh_report {
+    uint64_t faces, triangles, quads, ngons;  /* ngons: refused by ndfb_tangents; triangulate them */
+    uint64_t degenerate_triangles;    /* zero world area (e.g. two corners at one position) */
+    uint64_t zero_area_uv_triangles;  /* UV area ~0: no tangent of their own (MikkTSpace "group with any") */
+    uint64_t uv_islands;
+    uint64_t mirrored_islands;        /* UVs run clockwise: bitangent sign -1, split at their border (fine) */
+    uint64_t flipped_islands;         /* islands with triangles of both windings: UV fold-overs */
+    uint64_t flipped_triangles;       /* triangles wound against their island: a tangent split inside it */
+    uint64_t inverted_normal_faces;   /* corner normals point against the face winding */
+    int64_t ngon_first, degenerate_first, zero_area_uv_first, flipped_first, inverted_normal_first;
+} ndfb_mesh_report;
+
+/* text (may be NULL with capacity 0): a readable report, one finding per line; at most capacity
+ * bytes including the NUL; *length (may be NULL) receives the full length. */
+NDFB_API ndfb_status ndfb_mesh_diagnose(ndfb_context ctx, const ndfb_mesh* mesh, ndfb_mesh_report* report,
+                                        char* text, size_t capacity, size_t* length);
+
+/* Object-space <-> tangent-space normal maps, by rasterizing the mesh in UV space. Per texel the
+ * frame is rebuilt exactly as Blender's Normal Map node (tangent space) does it: barycentric,
+ * unnormalized interpolation of the corner tangent T, sign s and normal N, B = s * cross(N, T),
+ * n_object = normalize(x T + y B + z N). ndfb_object_to_tangent applies the exact inverse of that
+ * map, so rendering its output through the node gives back the object-space normals.
+ * Images: width*height*3 floats in [-1, 1] (count = width*height*3), rows top to bottom (row 0 at
+ * v = 1), texel (x, y) centred at u = (x + 0.5)/width, v = 1 - (y + 0.5)/height. Triangles are
+ * rasterized where they lie in [0,1]^2; where UVs overlap, the face listed first wins. Quads are
+ * interpolated split along 0-2 (1-3 when folded over 0-2), as Blender's renderer tessellates them;
+ * triangulate them first to be safe. tangents: NULL computes them with ndfb_tangents. */
+typedef struct ndfb_space_options {
+    uint32_t struct_size;
+    uint32_t padding;   /* texels grown around islands (default 16); NDFB_PAD_ALL fills the image.
+                           2^k texels keep k MIP levels free of bleeding across island borders */
+    uint32_t threads;   /* 0: all cores */
+} ndfb_space_options;
+#define NDFB_PAD_ALL 0xffffffffu
+/* coverage (may be NULL): width*height bytes, 0 = outside every island and the padding,
+ * 1 = inside a triangle, 2 = padding. Texels outside both hold (0, 0, 1) in tangent space and
+ * (0, 0, 0) in object space. */
+NDFB_API void ndfb_space_options_init(ndfb_space_options* options);
+NDFB_API ndfb_status ndfb_object_to_tangent(ndfb_context ctx, const ndfb_mesh* mesh, const float* tangents,
+                                            size_t tangent_count, const float* object_normals,
+                                            uint32_t width, uint32_t height, size_t count,
+                                            const ndfb_space_options* options, float* tangent_normals,
+                                            uint8_t* coverage);
+NDFB_API ndfb_status ndfb_tangent_to_object(ndfb_context ctx, const ndfb_mesh* mesh, const float* tangents,
+                                            size_t tangent_count, const float* tangent_normals,
+                                            uint32_t width, uint32_t height, size_t count,
+                                            const ndfb_space_options* options, float* object_normals,
+                                            uint8_t* coverage);
 
 /* ---- synthetic normal maps ----------------------------------------------------------------- */
 /* pattern: "vgroove", "bumps", "fbm", "brushed", "scratches", "weave". Tileable, deterministic. */

@@ -20,6 +20,10 @@ usage:
                                            write a synthetic tileable normal map
                                            (vgroove, bumps, fbm, brushed, scratches, weave)
   ndfbake info FILE                        describe an image and its ndfbake attributes
+  ndfbake bench [MAP...] --out DIR [options]
+                                           every representation on the six synthetic patterns
+                                           and the given maps: time, storage, error (CSV, Markdown,
+                                           heat maps; examples/plot_bench.py draws the chart)
   ndfbake --help | --version
 
 bake options:
@@ -27,7 +31,8 @@ bake options:
   --tolerance T        stop adding lobes once the texel's relative effective-BRDF error is
                        at most T (default 0.05); 0 always uses --max-lobes
   --brdf SPEC          base BRDF the tolerance is measured with: ggx:ROUGHNESS (Blender's
-                       roughness, default ggx:0.5), blinn-phong:EXPONENT, or lambert
+                       roughness, default ggx:0.5), blinn-phong:EXPONENT,
+                       beckmann:SLOPE, or lambert
   --convention C       opengl (+Y, Blender) or directx (-Y) input (default opengl)
   --wrap W             repeat (tiling texture, default) or clamp
   --srgb P             data (default: an sRGB tag is ignored, values are the normal) or linearize
@@ -36,6 +41,16 @@ bake options:
   --no-align           fit texels independently (no lobe alignment across texels and levels)
   --threads N          worker threads (default: all cores)
   --quiet              no progress output
+
+bench options:
+  --size N             side of the synthetic patterns (default 256; 0 leaves them out)
+  --methods LIST       comma-separated: bake-default, vmf-1 … vmf-8, vmf-4-hierarchical, naive,
+                       toksvig, single-vmf, lean, xu-1x1, xu-1x4, xu-2x4, xu-adaptive, sh-2 … sh-8
+                       (default: all)
+  --brdfs LIST         comma-separated BRDF specs as for bake (default ggx:0.3,ggx:0.6)
+  --levels LIST        comma-separated MIP levels (default 2,4,6)
+  --texels N           texels measured per level (default 64)
+  --threads N
 
 Exit status: 0 on success; 1 bad usage; 2 bad input; 3 cannot write output; 4 other failure;
 130 interrupted (no output is left behind).
@@ -118,6 +133,7 @@ bool parse_brdf(const std::string& spec, ndfb_fit_options& fit)
     const std::string name = spec.substr(0, colon);
     if (name == "ggx") fit.brdf = NDFB_BRDF_GGX;
     else if (name == "blinn-phong") fit.brdf = NDFB_BRDF_BLINN_PHONG;
+    else if (name == "beckmann") fit.brdf = NDFB_BRDF_BECKMANN;
     else return false;
     fit.brdf_parameter = float(value);
     return true;
@@ -229,6 +245,45 @@ int run_synth(ndfb_context ctx, const Args& args)
     return 0;
 }
 
+int print_bench_line(void*, const char* line, float)
+{
+    std::fprintf(stderr, "%s\n", line);
+    return g_interrupted ? 1 : 0;
+}
+
+int run_bench(ndfb_context ctx, const Args& args)
+{
+    ndfb_bench_options bench;
+    ndfb_bench_options_init(&bench);
+    std::string out_dir, methods, brdfs, levels;
+    for (const auto& [name, value] : args.options) {
+        double number = 0.0;
+        const bool numeric = parse_number(value, number) && number >= 0 && number == double(int(number));
+        if (name == "--out") out_dir = value;
+        else if (name == "--size" && numeric) bench.synthetic_size = uint32_t(number);
+        else if (name == "--texels" && numeric) bench.texels_per_level = uint32_t(number);
+        else if (name == "--threads" && numeric) bench.threads = uint32_t(number);
+        else if (name == "--methods") methods = value;
+        else if (name == "--brdfs") brdfs = value;
+        else if (name == "--levels") levels = value;
+        else return fail(1, "bad option " + name + " " + value + " (see --help)");
+    }
+    if (out_dir.empty()) return fail(1, "bench needs --out DIR");
+    std::vector<const char*> paths;
+    for (const std::string& p : args.positional) paths.push_back(p.c_str());
+    bench.map_paths = paths.data();
+    bench.map_count = paths.size();
+    if (!methods.empty()) bench.methods = methods.c_str();
+    if (!brdfs.empty()) bench.brdfs = brdfs.c_str();
+    if (!levels.empty()) bench.levels = levels.c_str();
+    bench.progress = print_bench_line;
+    std::signal(SIGINT, on_interrupt);
+    const ndfb_status status = ndfb_bench(ctx, &bench, out_dir.c_str());
+    if (status != NDFB_OK) return fail_status(ctx, status);
+    std::printf("wrote %s/bench.csv, bench.md and heat maps\n", out_dir.c_str());
+    return 0;
+}
+
 int run_info(ndfb_context ctx, const Args& args)
 {
     if (args.positional.size() != 1 || !args.options.empty()) return fail(1, "info takes exactly one FILE");
@@ -265,6 +320,7 @@ int main(int argc, char** argv)
     if (command == "bake") code = run_bake(ctx, args);
     else if (command == "synth") code = run_synth(ctx, args);
     else if (command == "info") code = run_info(ctx, args);
+    else if (command == "bench") code = run_bench(ctx, args);
     else code = fail(1, "unknown command '" + command + "' (see --help)");
     ndfb_context_destroy(ctx);
     return code;

@@ -17,9 +17,7 @@
 #include "ndf/spherical_em.h"
 #include "synth/patterns.h"
 
-struct ndfb_context_s {
-    std::string last_error;
-};
+#include "capi/context.h"
 
 struct ndfb_normal_map_s {
     ndfbake::DecodeResult decoded;
@@ -35,31 +33,6 @@ using namespace ndfbake;
 
 constexpr uint32_t kAbiVersion = 1;
 thread_local std::string g_create_error;
-
-// Runs `body`, mapping every failure to a status and ctx's last-error text.
-template <typename Body>
-ndfb_status guarded(ndfb_context ctx, Body&& body)
-{
-    std::string message;
-    ndfb_status status = NDFB_OK;
-    try {
-        body();
-    } catch (const Error& e) {
-        status = ndfb_status(int(e.status()));
-        message = e.what();
-    } catch (const std::bad_alloc&) {
-        status = NDFB_ERROR_OUT_OF_MEMORY;
-        message = "out of memory";
-    } catch (const std::exception& e) {
-        status = NDFB_ERROR_INTERNAL;
-        message = std::string("internal error: ") + e.what();
-    } catch (...) {
-        status = NDFB_ERROR_INTERNAL;
-        message = "internal error";
-    }
-    if (ctx) ctx->last_error = status == NDFB_OK ? std::string() : message;
-    return status;
-}
 
 void require(bool condition, const std::string& message)
 {
@@ -95,6 +68,7 @@ BaseBrdf to_brdf(ndfb_brdf brdf, float parameter)
     case NDFB_BRDF_GGX: return BaseBrdf::ggx(parameter);
     case NDFB_BRDF_BLINN_PHONG: return BaseBrdf::blinn_phong(parameter);
     case NDFB_BRDF_LAMBERT: return BaseBrdf::lambert();
+    case NDFB_BRDF_BECKMANN: return BaseBrdf::beckmann(parameter);
     }
     throw Error(Status::invalid_argument, "unknown BRDF " + std::to_string(int(brdf)));
 }

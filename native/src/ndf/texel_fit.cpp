@@ -68,6 +68,41 @@ std::vector<VmfLobe> lobes_of_samples(std::span<const WeightedNormal> samples)
     return lobes;
 }
 
+// Two lobes as one: weights add, and so do their α-weighted mean resultant vectors (the merged
+// lobe is the single vMF of the union of their normals).
+VmfLobe merge_lobes(const VmfLobe& a, const VmfLobe& b)
+{
+    const float alpha = a.alpha + b.alpha;
+    const Vec3 r = (a.alpha * float(resultant_from_kappa(a.kappa)) * a.mu +
+                    b.alpha * float(resultant_from_kappa(b.kappa)) * b.mu) / alpha;
+    return {alpha, normalize_or(r, a.mu), kappa_from_resultant(length(r))};
+}
+
+// The lobe budget from the top down: merge the two closest lobes (the α-weighted nearest pair)
+// for as long as the error stays within the tolerance. One EM fit of the most lobes plus cheap
+// merges costs less than fitting every lobe count from one upwards.
+void merge_within_tolerance(TexelFit& fit, float tolerance, const TexelErrorMeter& meter)
+{
+    while (fit.lobes.size() > 1) {
+        size_t best_i = 0, best_j = 1;
+        float best_cost = std::numeric_limits<float>::infinity();
+        for (size_t i = 0; i < fit.lobes.size(); ++i)
+            for (size_t j = i + 1; j < fit.lobes.size(); ++j) {
+                const VmfLobe& a = fit.lobes[i];
+                const VmfLobe& b = fit.lobes[j];
+                const float cost = a.alpha * b.alpha / (a.alpha + b.alpha) * (1.0f - dot(a.mu, b.mu));
+                if (cost < best_cost) { best_cost = cost; best_i = i; best_j = j; }
+            }
+        std::vector<VmfLobe> merged = fit.lobes;
+        merged[best_i] = merge_lobes(fit.lobes[best_i], fit.lobes[best_j]);
+        merged.erase(merged.begin() + std::ptrdiff_t(best_j));
+        const float error = meter.error(merged);
+        if (error > tolerance) return;
+        fit.lobes = std::move(merged);
+        fit.error = error;
+    }
+}
+
 }  // namespace
 
 std::vector<VmfLobe> farthest_point_seeds(std::span<const VmfLobe> candidates,
@@ -119,28 +154,18 @@ TexelFit fit_texel(std::span<const WeightedNormal> samples, std::span<const VmfL
     if (budgeted) best.error = meter->error(best.lobes);
     if (max_lobes == 1 || (budgeted && best.error <= settings.tolerance)) return best;
 
-    // Without a budget, go straight to the most lobes the samples support.
-    if (!budgeted && int(samples.size()) <= max_lobes) {
-        best.lobes = lobes_of_samples(samples);
-        if (meter) best.error = meter->error(best.lobes);
-        return best;
-    }
-    for (int count = budgeted ? 2 : max_lobes; count <= max_lobes; ++count) {
-        std::vector<VmfLobe> lobes = fit_from_seeds(samples, child_lobes, count, settings);
-        if (int(lobes.size()) < count && budgeted) break;  // no more distinct directions
-        if (lobes.size() <= 1) break;
-        if (!budgeted) {
-            best.lobes = std::move(lobes);
-            break;
-        }
-        const float error = meter->error(lobes);
-        if (error < best.error) {
-            best.lobes = std::move(lobes);
+    // The most lobes the samples support: each distinct sample when there are few, else EM.
+    std::vector<VmfLobe> full = int(samples.size()) <= max_lobes
+                                    ? lobes_of_samples(samples)
+                                    : fit_from_seeds(samples, child_lobes, max_lobes, settings);
+    if (full.size() > 1) {
+        const float error = meter ? meter->error(full) : -1.0f;
+        if (!budgeted || error < best.error) {
+            best.lobes = std::move(full);
             best.error = error;
         }
-        if (best.error <= settings.tolerance) break;
     }
-    if (meter && !budgeted) best.error = meter->error(best.lobes);
+    if (budgeted && best.lobes.size() > 2) merge_within_tolerance(best, settings.tolerance, *meter);
     return best;
 }
 

@@ -37,8 +37,9 @@ struct TexelFit {
 std::vector<VmfLobe> farthest_point_seeds(std::span<const VmfLobe> candidates,
                                           std::span<const WeightedNormal> samples, int count);
 
-// The lobe budget: one lobe, then more (up to max_lobes) only while the error stays above the
-// tolerance. `meter` scores candidates; pass nullptr when tolerance ≤ 0.
+// The lobe budget: one lobe when it meets the tolerance; otherwise the max_lobes fit, merged down
+// for as long as the error stays within the tolerance. With tolerance ≤ 0, always the max_lobes
+// fit. `meter` scores candidates (and fills TexelFit::error); it may be nullptr without a budget.
 TexelFit fit_texel(std::span<const WeightedNormal> samples, std::span<const VmfLobe> child_lobes,
                    const TexelFitSettings& settings, const TexelErrorMeter* meter);
 
