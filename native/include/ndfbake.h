@@ -81,7 +81,8 @@ typedef struct ndfb_decode_options {
 typedef struct ndfb_fit_options {
     uint32_t struct_size;
     uint32_t max_lobes;           /* 1..NDFB_MAX_LOBES, default 4 */
-    float tolerance;              /* relative effective-BRDF error per texel, default 0.05; 0: always max_lobes */
+    float tolerance;              /* relative effective-BRDF error a texel may keep: fewer lobes where it
+                                     suffices (costs fitting time); default 0: max_lobes everywhere */
     ndfb_brdf brdf;               /* the base BRDF the tolerance is measured with, default GGX */
     float brdf_parameter;         /* GGX roughness (Blender's, α = r²) or Blinn-Phong exponent */
     ndfb_wrap wrap;

@@ -28,8 +28,8 @@ usage:
 
 bake options:
   --max-lobes N        most vMF lobes per texel, 1..8 (default 4)
-  --tolerance T        stop adding lobes once the texel's relative effective-BRDF error is
-                       at most T (default 0.05); 0 always uses --max-lobes
+  --tolerance T        use fewer lobes in a texel while its relative effective-BRDF error
+                       stays at most T (default 0: --max-lobes wherever the normals differ)
   --brdf SPEC          base BRDF the tolerance is measured with: ggx:ROUGHNESS (Blender's
                        roughness, default ggx:0.5), blinn-phong:EXPONENT,
                        beckmann:SLOPE, or lambert

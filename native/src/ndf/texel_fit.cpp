@@ -166,6 +166,7 @@ TexelFit fit_texel(std::span<const WeightedNormal> samples, std::span<const VmfL
         }
     }
     if (budgeted && best.lobes.size() > 2) merge_within_tolerance(best, settings.tolerance, *meter);
+    if (meter && best.error < 0.0f) best.error = meter->error(best.lobes);
     return best;
 }
 

@@ -17,7 +17,12 @@ inline constexpr float kMaxSeedKappa = 1e3f;
 
 struct TexelFitSettings {
     int max_lobes = 4;        // 1..kMaxLobes
-    float tolerance = 0.05f;  // relative effective-BRDF error; ≤ 0 always uses max_lobes
+    // Relative effective-BRDF error a texel may keep; ≤ 0 always fits max_lobes (where the samples
+    // have that many distinct directions). Off by default: measured by `ndfbake bench` on the
+    // synthetic patterns, scoring every texel costs more time than the lobes it saves (4.1 s
+    // against 2.8 s for 4 lobes everywhere, at slightly higher error), so the budget pays only
+    // where fewer slots are written or shaded.
+    float tolerance = 0.0f;
     EmSettings em;
     // Also start EM from the farthest samples and keep the likelier fit (see fit_from_two_starts);
     // off, only the finer level's lobes seed EM, as in §7.1.
