@@ -56,6 +56,10 @@ typedef enum ndfb_srgb_policy {
     NDFB_SRGB_AS_DATA = 0,   /* sRGB-tagged files: raw values are the encoded normal (usual case) */
     NDFB_SRGB_LINEARIZE = 1  /* decode the sRGB curve first (a map saved through a colour pipeline) */
 } ndfb_srgb_policy;
+typedef enum ndfb_fit_method {
+    NDFB_FIT_PER_LEVEL = 0,    /* every level from all the fine normals it covers (Han §7.1) */
+    NDFB_FIT_HIERARCHICAL = 1  /* every level from the level below's lobes: faster, less accurate */
+} ndfb_fit_method;
 typedef enum ndfb_representation {
     NDFB_REPR_VMF_MIXTURE = 0, /* the budgeted vMF mixture (what bake writes) */
     NDFB_REPR_SINGLE_VMF = 1,  /* one lobe from the mean resultant */
@@ -89,6 +93,7 @@ typedef struct ndfb_fit_options {
     int32_t align;                /* non-zero: aligned lobes (eq. 23) for hardware filtering, default 1 */
     float alignment_strength;     /* C of eq. 23, default 0.25 */
     uint32_t max_iterations;      /* EM iterations per texel, default 20 */
+    ndfb_fit_method method;       /* default NDFB_FIT_PER_LEVEL */
     uint32_t threads;             /* 0: all cores */
     ndfb_progress_fn progress;
     void* progress_user;

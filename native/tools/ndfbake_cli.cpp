@@ -38,6 +38,9 @@ bake options:
   --srgb P             data (default: an sRGB tag is ignored, values are the normal) or linearize
   --color FILE         base-colour image of the same size: also write per-lobe colour EXRs
   --precision P        half (default) or float EXR pixels
+  --method M           per-level (default: every level from its fine normals) or hierarchical
+                       (every level from the level below's lobes: faster, less accurate)
+  --iterations N       EM iterations per texel at most (default 20)
   --no-align           fit texels independently (no lobe alignment across texels and levels)
   --threads N          worker threads (default: all cores)
   --quiet              no progress output
@@ -195,6 +198,10 @@ int run_bake(ndfb_context ctx, const Args& args)
         else if (name == "--precision" && (value == "half" || value == "float"))
             write.precision = value == "half" ? NDFB_PRECISION_HALF : NDFB_PRECISION_FLOAT;
         else if (name == "--color") color = value;
+        else if (name == "--method" && (value == "per-level" || value == "hierarchical"))
+            fit.method = value == "per-level" ? NDFB_FIT_PER_LEVEL : NDFB_FIT_HIERARCHICAL;
+        else if (name == "--iterations" && numeric && number >= 1 && number == double(int(number)))
+            fit.max_iterations = uint32_t(number);
         else if (name == "--no-align") fit.align = 0;
         else if (name == "--quiet") progress.quiet = true;
         else return fail(1, "bad option " + name + (value.empty() ? "" : " " + value) + " (see --help)");

@@ -167,7 +167,9 @@ std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded,
     json.end_array().end_object();
 
     json.begin_object("settings")
+        .value("method", settings.method == FitMethod::hierarchical ? "hierarchical" : "per-level")
         .value("max_lobes", settings.fit.max_lobes)
+        .value("max_iterations", settings.fit.em.max_iterations)
         .value("tolerance", settings.fit.tolerance)
         .value("brdf", settings.brdf.to_string())
         .value("wrap", settings.wrap == WrapMode::wrap ? "repeat" : "clamp")

@@ -91,6 +91,7 @@ PyramidSettings to_pyramid(const ndfb_fit_options* o)
     require(o->max_iterations >= 1 && o->max_iterations <= 1000,
             "max_iterations must be in 1..1000, got " + std::to_string(o->max_iterations));
     require(o->threads <= 1024, "threads must be at most 1024");
+    require(o->method == NDFB_FIT_PER_LEVEL || o->method == NDFB_FIT_HIERARCHICAL, "unknown fit method");
     PyramidSettings s;
     s.fit.max_lobes = int(o->max_lobes);
     s.fit.tolerance = o->tolerance;
@@ -100,6 +101,7 @@ PyramidSettings to_pyramid(const ndfb_fit_options* o)
     s.align = o->align != 0;
     s.alignment_strength = o->alignment_strength;
     s.threads = int(o->threads);
+    s.method = o->method == NDFB_FIT_HIERARCHICAL ? FitMethod::hierarchical : FitMethod::per_level;
     return s;
 }
 
@@ -200,6 +202,7 @@ NDFB_API void ndfb_fit_options_init(ndfb_fit_options* o)
     o->align = d.align ? 1 : 0;
     o->alignment_strength = d.alignment_strength;
     o->max_iterations = uint32_t(d.fit.em.max_iterations);
+    o->method = NDFB_FIT_PER_LEVEL;
     o->threads = 0;
 }
 
