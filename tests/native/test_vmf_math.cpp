@@ -5,6 +5,7 @@
 #include <numbers>
 #include <vector>
 
+#include "error.h"
 #include "math/brdf.h"
 #include "math/sphere.h"
 #include "math/vmf.h"
@@ -128,6 +129,15 @@ TEST(BaseBrdf, ParsesAndRejectsSpecs)
     EXPECT_EQ(BaseBrdf::parse("lambert").kind(), BrdfKind::lambert);
     for (const char* bad : {"ggx", "ggx:", "ggx:2", "ggx:-1", "phong:3", "blinn-phong:0.5", "ggx:nan", ""})
         EXPECT_ANY_THROW(BaseBrdf::parse(bad)) << bad;
+    // A value that is not a number is an unknown spec, not a number out of range.
+    for (const char* bad : {"beckmann:abc", "blinn-phong:32x"}) {
+        try {
+            BaseBrdf::parse(bad);
+            ADD_FAILURE() << bad;
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("unknown BRDF"), std::string::npos) << e.what();
+        }
+    }
 }
 
 }  // namespace

@@ -94,10 +94,11 @@ BaseBrdf BaseBrdf::parse(const std::string& text)
         const std::string value = text.substr(colon + 1);
         char* end = nullptr;
         const float parameter = std::strtof(value.c_str(), &end);
-        if (!value.empty() && end && *end == '\0')
+        if (!value.empty() && end && *end == '\0') {
             if (name == "ggx") return ggx(parameter);
             if (name == "beckmann") return beckmann(parameter);
             return blinn_phong(parameter);
+        }
     }
     throw Error(Status::invalid_argument, "unknown BRDF '" + text +
                                               "': expected lambert, blinn-phong:EXPONENT, ggx:ROUGHNESS or beckmann:SLOPE");

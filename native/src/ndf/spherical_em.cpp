@@ -1,5 +1,7 @@
 #include "ndf/spherical_em.h"
 
+#include "math/fast_exp.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -53,6 +55,95 @@ float responsibilities(std::span<const VmfLobe> lobes, std::span<const LobeTerms
     return max_log + std::log(sum);
 }
 
+// Samples in structure-of-arrays form, so that the E-step runs over many samples per lobe at once.
+struct SampleBlocks {
+    std::vector<float> x, y, z, w;
+    explicit SampleBlocks(std::span<const WeightedNormal> samples)
+    {
+        for (const WeightedNormal& s : samples) {
+            x.push_back(s.n.x);
+            y.push_back(s.n.y);
+            z.push_back(s.n.z);
+            w.push_back(s.weight);
+        }
+    }
+    size_t size() const { return x.size(); }
+};
+
+// Samples per E-step block: a lobe's terms for a block fit in L1 alongside the samples.
+constexpr size_t kEStepBlock = 64;
+
+// One E-step over all samples: accumulates Σ w z_ij and Σ w z_ij n_i per lobe, the log-likelihood
+// and the worst-explained sample. Summaries sharpen their responsibilities by their weight.
+void e_step(const SampleBlocks& s, std::span<const VmfLobe> lobes, std::span<const LobeTerms> terms, bool summaries,
+            std::vector<double>& lobe_weight, std::vector<Vec3d>& lobe_sum, double& log_likelihood, float& worst_log,
+            size_t& worst_sample)
+{
+    const size_t J = lobes.size();
+    alignas(64) float log_p[kMaxLobes][kEStepBlock];
+    alignas(64) float e[kMaxLobes][kEStepBlock];
+    alignas(64) float peak[kEStepBlock], sum[kEStepBlock], inv[kEStepBlock];
+    for (size_t begin = 0; begin < s.size(); begin += kEStepBlock) {
+        const size_t n = std::min(kEStepBlock, s.size() - begin);
+        const float *x = &s.x[begin], *y = &s.y[begin], *z = &s.z[begin], *w = &s.w[begin];
+        for (size_t i = 0; i < n; ++i) peak[i] = -std::numeric_limits<float>::infinity();
+        for (size_t j = 0; j < J; ++j) {
+            const float k = lobes[j].kappa, mx = lobes[j].mu.x, my = lobes[j].mu.y, mz = lobes[j].mu.z;
+            const float base = terms[j].log_alpha + terms[j].log_norm_shifted - k;
+#pragma omp simd
+            for (size_t i = 0; i < n; ++i) {
+                log_p[j][i] = base + k * (mx * x[i] + my * y[i] + mz * z[i]);
+                peak[i] = std::max(peak[i], log_p[j][i]);
+            }
+        }
+        for (size_t i = 0; i < n; ++i) sum[i] = 0.0f;
+        for (size_t j = 0; j < J; ++j) {
+#pragma omp simd
+            for (size_t i = 0; i < n; ++i) {
+                e[j][i] = fast_exp_nonpositive(log_p[j][i] - peak[i]);
+                sum[i] += e[j][i];
+            }
+        }
+        for (size_t i = 0; i < n; ++i) {
+            if (!std::isfinite(peak[i])) {  // every lobe dead: the sample joins no lobe
+                inv[i] = 0.0f;
+                continue;
+            }
+            const float lse = peak[i] + std::log(sum[i]);
+            log_likelihood += double(w[i]) * lse;
+            if (lse < worst_log) {
+                worst_log = lse;
+                worst_sample = begin + i;
+            }
+            inv[i] = w[i] / sum[i];
+        }
+        if (summaries) {
+            // (α_j γ_j)^w normalized: recompute the terms sharpened, per sample.
+            for (size_t i = 0; i < n; ++i) {
+                if (inv[i] == 0.0f) continue;
+                float sharp_sum = 0.0f;
+                for (size_t j = 0; j < J; ++j) sharp_sum += (e[j][i] = fast_exp_nonpositive(w[i] * (log_p[j][i] - peak[i])));
+                inv[i] = w[i] / sharp_sum;
+            }
+        }
+        for (size_t j = 0; j < J; ++j) {
+            float weight = 0.0f, sx = 0.0f, sy = 0.0f, sz = 0.0f;
+#pragma omp simd reduction(+ : weight, sx, sy, sz)
+            for (size_t i = 0; i < n; ++i) {
+                const float r = e[j][i] * inv[i];
+                weight += r;
+                sx += r * x[i];
+                sy += r * y[i];
+                sz += r * z[i];
+            }
+            lobe_weight[j] += weight;
+            lobe_sum[j].x += sx;
+            lobe_sum[j].y += sy;
+            lobe_sum[j].z += sz;
+        }
+    }
+}
+
 }  // namespace
 
 VmfLobe single_vmf_lobe(std::span<const WeightedNormal> samples)
@@ -72,10 +163,10 @@ EmResult fit_vmf_mixture(std::span<const WeightedNormal> samples, std::vector<Vm
     for (const WeightedNormal& s : samples) total_weight += s.weight;
     const double min_weight = samples.size() > 0 ? total_weight / double(samples.size()) : 1.0;
 
+    const SampleBlocks soa(samples);
     std::vector<double> lobe_weight(J);
     std::vector<Vec3d> lobe_sum(J);
     std::vector<bool> reseeded(J, false);
-    std::vector<float> z(J);
     double previous = -std::numeric_limits<double>::infinity();
 
     for (int iteration = 0; iteration < settings.max_iterations; ++iteration) {
@@ -87,18 +178,7 @@ EmResult fit_vmf_mixture(std::span<const WeightedNormal> samples, std::vector<Vm
         size_t worst_sample = 0;
 
         // E-step (Algorithm 1 line 5, with α_j), accumulating the M-step's sums on the fly.
-        for (size_t i = 0; i < samples.size(); ++i) {
-            const WeightedNormal& s = samples[i];
-            const float lse = responsibilities(lobes, terms, s.n, z.data(), settings.summaries ? s.weight : 1.0f);
-            if (!std::isfinite(lse)) continue;
-            log_likelihood += double(s.weight) * lse;
-            if (lse < worst_log) { worst_log = lse; worst_sample = i; }
-            for (size_t j = 0; j < J; ++j) {
-                const double wz = double(s.weight) * z[j];
-                lobe_weight[j] += wz;
-                lobe_sum[j].add(s.n, wz);
-            }
-        }
+        e_step(soa, lobes, terms, settings.summaries, lobe_weight, lobe_sum, log_likelihood, worst_log, worst_sample);
         result.iterations = iteration + 1;
         result.mean_log_likelihood = log_likelihood / total_weight;
 

@@ -9,6 +9,9 @@
 
 namespace ndfbake {
 
+// The most lobes a texel keeps (and EM fits at once).
+inline constexpr int kMaxLobes = 8;
+
 struct EmSettings {
     int max_iterations = 20;     // §7.1: "we seldom need more than 10 iterations"
     double convergence = 1e-7;   // stop when the mean log-likelihood moves less than this

@@ -10,7 +10,6 @@
 
 namespace ndfbake {
 
-inline constexpr int kMaxLobes = 8;
 // EM's starting κ is capped: seeds taken from finer levels can be near kKappaMax, and a start
 // that sharp makes the first E-step a hard assignment that EM cannot recover from.
 inline constexpr float kMaxSeedKappa = 1e3f;
