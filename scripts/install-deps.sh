@@ -2,7 +2,7 @@
 # Installs what ndfbake needs on Debian 12 from Debian's own packages. Run as root (or via sudo).
 set -euo pipefail
 packages=(build-essential cmake pkg-config libopenimageio-dev libopenexr-dev openimageio-tools
-          libgtest-dev python3)
+          libgtest-dev python3 blender assimp-testmodels xvfb)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

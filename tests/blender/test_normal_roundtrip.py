@@ -1,0 +1,182 @@
+"""Round trip of an object-space normal map through ndfbake's tangent-space conversion and
+Blender's Normal Map node, checked with Cycles bakes inside `blender -b`.
+
+Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_normal_roundtrip.py -- LIB
+
+1. A mirrored Suzanne (triangulated, copy's UVs mirrored beside the original's) gets a bumpy
+   material; Cycles bakes its shading normals in OBJECT space: the object-space map O.
+2. ndfb_object_to_tangent converts O to a tangent-space map T (frames computed by ndfbake).
+3. A second material renders T through an Image Texture and the Normal Map node (tangent space,
+   Cycles computing its own MikkTSpace tangents); Cycles bakes its shading normals in OBJECT
+   space again: O'.
+4. O' must reproduce O: per texel angle, away from island borders (where a texel centre can fall
+   outside every triangle) under 1 degree. Also checks that ndfb_tangent_to_object(T) == O.
+"""
+import math
+import os
+import sys
+
+import bpy
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from ndfb_mesh import Library, MeshArrays  # noqa: E402
+from test_tangents import mirrored_suzanne  # noqa: E402
+
+SIZE = 128
+LIMIT_DEGREES = 1.0
+
+
+def bake_object_normals(obj, material, image):
+    """Cycles NORMAL bake in object space into `image` (float), returned as rows top to bottom,
+    unit vectors, plus the mask of baked texels."""
+    obj.data.materials.clear()
+    obj.data.materials.append(material)
+    nodes = material.node_tree.nodes
+    target = nodes.new("ShaderNodeTexImage")
+    target.image = image
+    nodes.active = target
+    image.generated_color = (0.0, 0.0, 0.0, 0.0)
+    image.pixels.foreach_set(np.zeros(SIZE * SIZE * 4, dtype=np.float32))
+    bpy.ops.object.bake(type="NORMAL", normal_space="OBJECT", margin=0, use_clear=False)
+    px = np.empty(SIZE * SIZE * 4, dtype=np.float32)
+    image.pixels.foreach_get(px)
+    px = px.reshape(SIZE, SIZE, 4)[::-1]  # Blender stores rows bottom to top
+    normals = px[..., :3] * 2.0 - 1.0
+    baked = px[..., 3] > 0.5  # the bake writes alpha 1 where it wrote a normal
+    normals /= np.maximum(np.linalg.norm(normals, axis=-1, keepdims=True), 1e-12)
+    nodes.remove(target)
+    return normals, baked
+
+
+def float_image(name):
+    image = bpy.data.images.new(name, SIZE, SIZE, alpha=True, float_buffer=True)
+    image.colorspace_settings.name = "Non-Color"
+    return image
+
+
+def bumpy_material():
+    m = bpy.data.materials.new("bumpy")
+    m.use_nodes = True
+    nodes, links = m.node_tree.nodes, m.node_tree.links
+    nodes.remove(nodes["Principled BSDF"])
+    bsdf = nodes.new("ShaderNodeBsdfDiffuse")
+    links.new(bsdf.outputs["BSDF"], nodes["Material Output"].inputs["Surface"])
+    coord = nodes.new("ShaderNodeTexCoord")
+    noise = nodes.new("ShaderNodeTexNoise")
+    noise.inputs["Scale"].default_value = 6.0
+    noise.inputs["Detail"].default_value = 1.0
+    bump = nodes.new("ShaderNodeBump")
+    bump.inputs["Strength"].default_value = 1.0
+    bump.inputs["Distance"].default_value = 0.2
+    links.new(coord.outputs["Object"], noise.inputs["Vector"])
+    links.new(noise.outputs["Fac"], bump.inputs["Height"])
+    links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
+    return m
+
+
+def normal_map_material(image, uv_name):
+    m = bpy.data.materials.new("normal_mapped")
+    m.use_nodes = True
+    nodes, links = m.node_tree.nodes, m.node_tree.links
+    bsdf = nodes["Principled BSDF"]
+    tex = nodes.new("ShaderNodeTexImage")
+    tex.image = image
+    tex.interpolation = "Closest"
+    nmap = nodes.new("ShaderNodeNormalMap")
+    nmap.space = "TANGENT"
+    nmap.uv_map = uv_name
+    links.new(tex.outputs["Color"], nmap.inputs["Color"])
+    links.new(nmap.outputs["Normal"], bsdf.inputs["Normal"])
+    return m
+
+
+def interior(mask, radius):
+    """Texels whose (2 radius + 1)^2 neighbourhood is entirely inside `mask`."""
+    out = mask.copy()
+    for dy in range(-radius, radius + 1):
+        for dx in range(-radius, radius + 1):
+            shifted = np.zeros_like(mask)
+            ys = slice(max(dy, 0), SIZE + min(dy, 0))
+            yd = slice(max(-dy, 0), SIZE + min(-dy, 0))
+            xs = slice(max(dx, 0), SIZE + min(dx, 0))
+            xd = slice(max(-dx, 0), SIZE + min(-dx, 0))
+            shifted[yd, xd] = mask[ys, xs]
+            out &= shifted
+    return out
+
+
+def angles_degrees(a, b):
+    """Angle between unit vectors, in float64 via atan2: arccos of a float32 dot product cannot
+    resolve angles below ~0.02 degrees."""
+    a, b = a.astype(np.float64), b.astype(np.float64)
+    return np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.sum(a * b, axis=-1)))
+
+
+def main():
+    args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    if not args:
+        print("usage: blender -b --python test_normal_roundtrip.py -- /path/to/libndfbake.so")
+        sys.exit(2)
+    lib = Library(args[0])
+    me = mirrored_suzanne(True)
+    obj = bpy.context.object
+    scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = 1
+    scene.cycles.use_denoising = False  # Debian's Blender has no OpenImageDenoise: baking would fail
+    obj.select_set(True)
+    bpy.context.view_layer.objects.active = obj
+
+    original, baked = bake_object_normals(obj, bumpy_material(), float_image("object_space"))
+
+    me.calc_normals_split()
+    arrays = MeshArrays.from_blender(me)
+    tangent_map, coverage = lib.convert(arrays, original, SIZE, SIZE, to_tangent=True, padding=4)
+    back, _ = lib.convert(arrays, tangent_map, SIZE, SIZE, to_tangent=False, padding=0)
+
+    tangent_image = float_image("tangent_space")
+    rgba = np.ones((SIZE, SIZE, 4), dtype=np.float32)
+    rgba[..., :3] = tangent_map * 0.5 + 0.5
+    tangent_image.pixels.foreach_set(rgba[::-1].reshape(-1))
+    rendered, baked_again = bake_object_normals(obj, normal_map_material(tangent_image, me.uv_layers.active.name),
+                                                float_image("object_space_again"))
+
+    inside = (coverage == 1) & baked & baked_again
+    away = interior(inside, 1)
+    error = angles_degrees(original, rendered)
+    inverse = angles_degrees(original, back / np.maximum(np.linalg.norm(back, axis=-1, keepdims=True), 1e-12))
+    # How much the map itself bends the normals: the round trip must do much better than that.
+    plain = bpy.data.materials.new("plain")
+    plain.use_nodes = True
+    surface, _ = bake_object_normals(obj, plain, float_image("plain_normals"))
+    detail = angles_degrees(original, surface)
+    print("texels: %d baked, %d rasterized by ndfbake, %d away from island borders" % (
+        int(baked.sum()), int((coverage == 1).sum()), int(away.sum())))
+    print("normal map detail (angle to the unmapped normal): mean %.2f deg, max %.2f deg" % (
+        float(detail[away].mean()), float(detail[away].max())))
+    print("ndfb_tangent_to_object(ndfb_object_to_tangent(O)) vs O: max %.2e deg" % float(inverse[coverage == 1].max()))
+    border = inside & ~away
+    print("round trip through Blender's Normal Map node (Cycles): %d texels away from island borders: max %.3f deg, "
+          "mean %.4f deg; %d border texels: median %.3f deg, %d over 1 deg (texel centres near an edge that the two "
+          "rasterizers give to different triangles, or UVs that overlap)" % (
+              int(away.sum()), float(error[away].max()), float(error[away].mean()), int(border.sum()),
+              float(np.median(error[border])), int((error[border] > 1.0).sum())))
+    failures = []
+    if away.sum() < 0.3 * (coverage == 1).sum():
+        failures.append("too few texels compared")
+    if detail[away].mean() < 5.0:
+        failures.append("the test map has too little detail to tell anything")
+    if float(inverse[coverage == 1].max()) > 1e-3:
+        failures.append("ndfb_tangent_to_object is not the inverse of ndfb_object_to_tangent")
+    if float(error[away].max()) >= LIMIT_DEGREES:
+        failures.append("round trip error %.3f deg >= %.1f deg" % (float(error[away].max()), LIMIT_DEGREES))
+    if failures:
+        print("FAILURES:\n  " + "\n  ".join(failures))
+        sys.exit(1)
+    print("round trip passed")
+
+
+if __name__ == "__main__":
+    main()

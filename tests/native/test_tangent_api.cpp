@@ -1,0 +1,244 @@
+// The tangent module through its C API: bad meshes give clear errors (never a crash), vertex
+// splits never weld across a mirror seam, texel densities and diagnostics match hand-computed
+// values, and the object <-> tangent space conversion is the exact inverse of the Normal Map
+// node's per-pixel frame.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "ndfbake.h"
+#include "tangent_fixtures.h"
+
+namespace ndfbake {
+namespace {
+
+using tangent_testing::bumpy_grid;
+using tangent_testing::TestMesh;
+
+constexpr Vec3 kUp{0.0f, 0.0f, 1.0f};
+
+class TangentApi : public ::testing::Test {
+protected:
+    void SetUp() override { ASSERT_EQ(ndfb_context_create(&ctx_), NDFB_OK); }
+    void TearDown() override { ndfb_context_destroy(ctx_); }
+
+    static ndfb_mesh view(const TestMesh& m)
+    {
+        ndfb_mesh v;
+        ndfb_mesh_init(&v);
+        v.positions = m.positions.data();
+        v.vertex_count = m.positions.size() / 3;
+        v.face_sizes = m.sizes.data();
+        v.face_count = m.sizes.size();
+        v.corner_vertices = m.corners.data();
+        v.corner_count = m.corners.size();
+        v.normals = m.normals.data();
+        v.uvs = m.uvs.data();
+        return v;
+    }
+    ndfb_status tangents(const TestMesh& m, std::vector<float>& out)
+    {
+        const ndfb_mesh v = view(m);
+        out.assign(m.corner_count() * 4, 0.0f);
+        return ndfb_tangents(ctx_, &v, 0, out.data(), out.size(), nullptr, 0);
+    }
+    std::string error() const { return ndfb_last_error(ctx_); }
+
+    ndfb_context ctx_ = nullptr;
+};
+
+TestMesh unit_square()
+{
+    TestMesh m;
+    const uint32_t a = m.vertex({0, 0, 0}), b = m.vertex({2, 0, 0}), c = m.vertex({2, 2, 0}), d = m.vertex({0, 2, 0});
+    m.face({a, b, c, d}, {{{0, 0}}, {{1, 0}}, {{1, 1}}, {{0, 1}}}, kUp);
+    return m;
+}
+
+TEST_F(TangentApi, BadMeshesAreRefusedWithMessagesNamingTheElement)
+{
+    std::vector<float> out;
+    TestMesh m = unit_square();
+    m.positions[4] = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_EQ(tangents(m, out), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(error().find("position of vertex 1 is not finite"), std::string::npos) << error();
+
+    m = unit_square();
+    m.corners[2] = 7;
+    EXPECT_EQ(tangents(m, out), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(error().find("corner 2 refers to vertex 7 but the mesh has 4 vertices"), std::string::npos) << error();
+
+    m = unit_square();
+    m.uvs[5] = std::numeric_limits<float>::infinity();
+    EXPECT_EQ(tangents(m, out), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(error().find("uv of corner 2 is not finite"), std::string::npos) << error();
+
+    m = unit_square();
+    m.sizes = {5};
+    m.corners.push_back(0), m.uvs.insert(m.uvs.end(), {0, 0}), m.normals.insert(m.normals.end(), {0, 0, 1});
+    EXPECT_EQ(tangents(m, out), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(error().find("face 0 has 5 corners"), std::string::npos) << error();
+    EXPECT_NE(error().find("triangulate"), std::string::npos) << error();
+
+    m = unit_square();
+    m.sizes = {3};
+    EXPECT_EQ(tangents(m, out), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(error().find("face sizes add up to 3 corners but corner_vertices holds 4"), std::string::npos) << error();
+
+    ndfb_mesh empty;
+    ndfb_mesh_init(&empty);
+    out.assign(4, 0.0f);
+    EXPECT_EQ(ndfb_tangents(ctx_, &empty, 0, out.data(), out.size(), nullptr, 0), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(error().find("no faces"), std::string::npos) << error();
+
+    m = unit_square();
+    ndfb_mesh v = view(m);
+    v.struct_size = 0;
+    EXPECT_EQ(ndfb_tangents(ctx_, &v, 0, out.data(), out.size(), nullptr, 0), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(error().find("ndfb_mesh_init"), std::string::npos) << error();
+
+    v = view(m);
+    out.assign(15, 0.0f);
+    EXPECT_EQ(ndfb_tangents(ctx_, &v, 0, out.data(), out.size(), nullptr, 0), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(error().find("expected 16 elements, got 15"), std::string::npos) << error();
+    EXPECT_EQ(ndfb_tangents(ctx_, nullptr, 0, out.data(), out.size(), nullptr, 0), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(ndfb_tangents(ctx_, &v, 0, nullptr, 16, nullptr, 0), NDFB_ERROR_INVALID_ARGUMENT);
+
+    // A good call clears the message.
+    EXPECT_EQ(tangents(unit_square(), out), NDFB_OK);
+    EXPECT_EQ(error(), "");
+}
+
+TEST_F(TangentApi, TenMillionCoincidentVerticesGiveDefaultFramesQuickly)
+{
+    // Every vertex at one position: every triangle is degenerate. The welding must stay linear.
+    TestMesh m;
+    const size_t vertices = 10'000'000;
+    m.positions.assign(vertices * 3, 0.5f);
+    for (uint32_t t = 0; t < 3000; ++t) {
+        const uint32_t base = uint32_t((uint64_t(t) * 3331) % (vertices - 3));
+        m.face({base, base + 1, base + 2}, {{{0, 0}}, {{1, 0}}, {{0, 1}}}, kUp);
+    }
+    std::vector<float> out;
+    const auto start = std::chrono::steady_clock::now();
+    ASSERT_EQ(tangents(m, out), NDFB_OK) << error();
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_LT(seconds, 5.0);
+    for (size_t c = 0; c < m.corner_count(); ++c) {
+        EXPECT_EQ(out[4 * c], 1.0f);
+        EXPECT_EQ(out[4 * c + 3], -1.0f);
+    }
+}
+
+TEST_F(TangentApi, SplitsNeverWeldAcrossAMirrorSeam)
+{
+    // Two quads sharing the edge x = 0; the left one's UVs are the right one's mirrored, and the
+    // seam vertices share position, normal and UV: only the sign tells the corners apart.
+    TestMesh m;
+    const uint32_t s0 = m.vertex({0, 0, 0}), s1 = m.vertex({0, 1, 0});
+    const uint32_t r0 = m.vertex({1, 0, 0}), r1 = m.vertex({1, 1, 0}), l0 = m.vertex({-1, 0, 0}), l1 = m.vertex({-1, 1, 0});
+    m.face({s0, r0, r1, s1}, {{{0, 0}}, {{1, 0}}, {{1, 1}}, {{0, 1}}}, kUp);
+    m.face({l0, s0, s1, l1}, {{{1, 0}}, {{0, 0}}, {{0, 1}}, {{1, 1}}}, kUp);
+    const ndfb_mesh v = view(m);
+    std::vector<uint32_t> corner_to_vertex(m.corner_count()), source(m.corner_count());
+    ndfb_split_stats stats{};
+    ASSERT_EQ(ndfb_split_vertices(ctx_, &v, nullptr, 0, 0, corner_to_vertex.data(), corner_to_vertex.size(),
+                                  source.data(), source.size(), &stats),
+              NDFB_OK)
+        << error();
+    EXPECT_EQ(stats.input_vertices, 6u);
+    EXPECT_EQ(stats.output_vertices, 8u);
+    EXPECT_EQ(stats.mirror_seams, 2u);
+    EXPECT_EQ(stats.uv_seams + stats.hard_edges + stats.tangent_splits, 0u);
+    std::vector<float> t;
+    ASSERT_EQ(tangents(m, t), NDFB_OK);
+    for (size_t a = 0; a < m.corner_count(); ++a) {
+        EXPECT_EQ(source[corner_to_vertex[a]], m.corners[a]);
+        for (size_t b = 0; b < m.corner_count(); ++b)
+            if (corner_to_vertex[a] == corner_to_vertex[b])
+                EXPECT_EQ(std::memcmp(&t[4 * a], &t[4 * b], 16), 0) << a << " and " << b << " share a vertex";
+    }
+}
+
+TEST_F(TangentApi, AMeshWithoutSplitsKeepsItsVertexNumbering)
+{
+    const TestMesh m = bumpy_grid(8, 1);
+    const ndfb_mesh v = view(m);
+    std::vector<uint32_t> corner_to_vertex(m.corner_count()), source(m.corner_count());
+    ndfb_split_stats stats{};
+    ASSERT_EQ(ndfb_split_vertices(ctx_, &v, nullptr, 0, 0, corner_to_vertex.data(), corner_to_vertex.size(),
+                                  source.data(), source.size(), &stats),
+              NDFB_OK);
+    EXPECT_EQ(stats.output_vertices, stats.input_vertices);
+    EXPECT_EQ(corner_to_vertex, m.corners);
+}
+
+TEST_F(TangentApi, TexelDensityIsTheSquareRootOfUVAreaOverWorldArea)
+{
+    TestMesh m = unit_square();  // 2 x 2 world units mapped onto the unit UV square
+    const uint32_t a = m.vertex({0, 0, 1}), b = m.vertex({1, 0, 1}), c = m.vertex({0, 1, 1});
+    m.face({a, b, c}, {{{0, 0}}, {{2, 0}}, {{0, 2}}}, kUp);        // 0.5 world, 2 UV: density 2
+    m.face({a, b, c}, {{{0.3f, 0.3f}}, {{0.3f, 0.3f}}, {{0.3f, 0.3f}}}, kUp);  // no UV area: 0
+    const ndfb_mesh v = view(m);
+    std::vector<float> density(3);
+    double total = 0;
+    ASSERT_EQ(ndfb_texel_density(ctx_, &v, density.data(), density.size(), &total), NDFB_OK) << error();
+    EXPECT_NEAR(density[0], 0.5, 1e-6);
+    EXPECT_NEAR(density[1], 2.0, 1e-6);
+    EXPECT_EQ(density[2], 0.0f);
+    EXPECT_NEAR(total, std::sqrt(3.0 / 5.0), 1e-6);
+}
+
+TEST_F(TangentApi, DiagnosticsCountWhatAUserCanFix)
+{
+    TestMesh m;
+    auto v = [&](float x, float y, float z) { return m.vertex({x, y, z}); };
+    // 0: a pentagon (n-gon).
+    m.face({v(0, 0, 0), v(1, 0, 0), v(1.5f, 1, 0), v(0.5f, 1.5f, 0), v(-0.5f, 1, 0)},
+           {{{0, 0}}, {{0.1f, 0}}, {{0.15f, 0.1f}}, {{0.05f, 0.15f}}, {{-0.05f, 0.1f}}}, kUp);
+    // 1: collinear positions (degenerate).
+    m.face({v(3, 0, 0), v(4, 0, 0), v(5, 0, 0)}, {{{0.3f, 0.3f}}, {{0.4f, 0.3f}}, {{0.35f, 0.4f}}}, kUp);
+    // 2: zero UV area.
+    m.face({v(6, 0, 0), v(7, 0, 0), v(6, 1, 0)}, {{{0.5f, 0.5f}}, {{0.5f, 0.5f}}, {{0.5f, 0.5f}}}, kUp);
+    // 3: a mirrored island (clockwise UVs).
+    m.face({v(8, 0, 0), v(9, 0, 0), v(8, 1, 0)}, {{{0.7f, 0.7f}}, {{0.6f, 0.7f}}, {{0.7f, 0.8f}}}, kUp);
+    // 4, 5: an island folded over its shared UV edge (both third UVs on one side).
+    const uint32_t p = v(10, 0, 0), q = v(11, 0, 0), r = v(10, 1, 0), s = v(11, 1, 0);
+    m.face({p, q, r}, {{{0.8f, 0.1f}}, {{0.9f, 0.1f}}, {{0.8f, 0.2f}}}, kUp);
+    m.face({q, s, r}, {{{0.9f, 0.1f}}, {{0.82f, 0.12f}}, {{0.8f, 0.2f}}}, kUp);
+    // 6: normals against the winding.
+    m.face({v(12, 0, 0), v(13, 0, 0), v(12, 1, 0)}, {{{0.2f, 0.6f}}, {{0.3f, 0.6f}}, {{0.2f, 0.7f}}}, kUp * -1.0f);
+    const ndfb_mesh view_ = view(m);
+    ndfb_mesh_report r_{};
+    char text[2048];
+    ASSERT_EQ(ndfb_mesh_diagnose(ctx_, &view_, &r_, text, sizeof text, nullptr), NDFB_OK) << error();
+    EXPECT_EQ(r_.faces, 7u);
+    EXPECT_EQ(r_.ngons, 1u);
+    EXPECT_EQ(r_.ngon_first, 0);
+    EXPECT_EQ(r_.degenerate_triangles, 1u);
+    EXPECT_EQ(r_.degenerate_first, 1);
+    EXPECT_EQ(r_.zero_area_uv_triangles, 1u);
+    EXPECT_EQ(r_.zero_area_uv_first, 2);
+    EXPECT_EQ(r_.mirrored_islands, 1u);
+    EXPECT_EQ(r_.flipped_islands, 1u);
+    EXPECT_EQ(r_.flipped_triangles, 1u);
+    EXPECT_EQ(r_.flipped_first, 5);
+    EXPECT_EQ(r_.inverted_normal_faces, 1u);
+    EXPECT_EQ(r_.inverted_normal_first, 6);
+    const std::string s_ = text;
+    for (const char* phrase : {"n-gons: 1 (first: face 0)", "degenerate triangles: 1", "flipped islands: 1",
+                               "inverted normals: 1", "mirrored islands: 1"})
+        EXPECT_NE(s_.find(phrase), std::string::npos) << phrase << "\n" << s_;
+    // The same mesh is refused for frames, with the reason.
+    std::vector<float> out;
+    EXPECT_EQ(tangents(m, out), NDFB_ERROR_INVALID_ARGUMENT);
+}
+
+}  // namespace
+}  // namespace ndfbake
