@@ -1,6 +1,8 @@
 // Small meshes for the tangent tests, built face by face, and helpers to run the generator on them.
 #pragma once
 
+#include "ndfbake.h"
+
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -66,6 +68,22 @@ struct Frames {
     Vec3 tangent(size_t c) const { return {t[4 * c], t[4 * c + 1], t[4 * c + 2]}; }
     float sign(size_t c) const { return t[4 * c + 3]; }
 };
+
+// The mesh as the C API takes it: plain arrays viewed, not copied.
+inline ndfb_mesh mesh_view(const TestMesh& m)
+{
+    ndfb_mesh v;
+    ndfb_mesh_init(&v);
+    v.positions = m.positions.data();
+    v.vertex_count = m.positions.size() / 3;
+    v.face_sizes = m.sizes.data();
+    v.face_count = m.sizes.size();
+    v.corner_vertices = m.corners.data();
+    v.corner_count = m.corners.size();
+    v.normals = m.normals.data();
+    v.uvs = m.uvs.data();
+    return v;
+}
 
 inline Frames frames_of(const TestMesh& m, int threads = 1)
 {

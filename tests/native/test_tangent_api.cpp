@@ -28,20 +28,7 @@ protected:
     void SetUp() override { ASSERT_EQ(ndfb_context_create(&ctx_), NDFB_OK); }
     void TearDown() override { ndfb_context_destroy(ctx_); }
 
-    static ndfb_mesh view(const TestMesh& m)
-    {
-        ndfb_mesh v;
-        ndfb_mesh_init(&v);
-        v.positions = m.positions.data();
-        v.vertex_count = m.positions.size() / 3;
-        v.face_sizes = m.sizes.data();
-        v.face_count = m.sizes.size();
-        v.corner_vertices = m.corners.data();
-        v.corner_count = m.corners.size();
-        v.normals = m.normals.data();
-        v.uvs = m.uvs.data();
-        return v;
-    }
+    static ndfb_mesh view(const TestMesh& m) { return mesh_view(m); }
     ndfb_status tangents(const TestMesh& m, std::vector<float>& out)
     {
         const ndfb_mesh v = view(m);

@@ -29,16 +29,7 @@ protected:
                                uint32_t padding, std::vector<uint8_t>* coverage = nullptr,
                                const std::vector<float>& tangents = {})
     {
-        ndfb_mesh v;
-        ndfb_mesh_init(&v);
-        v.positions = m.positions.data();
-        v.vertex_count = m.positions.size() / 3;
-        v.face_sizes = m.sizes.data();
-        v.face_count = m.sizes.size();
-        v.corner_vertices = m.corners.data();
-        v.corner_count = m.corners.size();
-        v.normals = m.normals.data();
-        v.uvs = m.uvs.data();
+        const ndfb_mesh v = mesh_view(m);
         ndfb_space_options o;
         ndfb_space_options_init(&o);
         o.padding = padding;

@@ -100,6 +100,19 @@ void check_image(uint32_t width, uint32_t height, size_t count, const void* in, 
     require_count(count, size_t(width) * height * 3, "normal image floats (width*height*3)");
 }
 
+// Both directions of ndfb_object_to_tangent / ndfb_tangent_to_object: check, then convert.
+void convert_space(const ndfb_mesh* mesh, const float* tangents, size_t tangent_count, SpaceDirection direction,
+                   const float* in, uint32_t width, uint32_t height, size_t count, const ndfb_space_options* options,
+                   float* out, uint8_t* coverage)
+{
+    check_image(width, height, count, in, out);
+    const SpaceSettings s = to_space(options);
+    const MeshInput m = mesh_input(mesh, NgonPolicy::refuse);
+    const std::vector<float> t = tangents_for(m, tangents, tangent_count, s.threads);
+    convert_normal_map(m, t, direction, {in, count}, int(width), int(height), s, {out, count},
+                       coverage ? std::span<uint8_t>(coverage, size_t(width) * height) : std::span<uint8_t>());
+}
+
 }  // namespace
 
 extern "C" {
@@ -208,13 +221,8 @@ NDFB_API ndfb_status ndfb_object_to_tangent(ndfb_context ctx, const ndfb_mesh* m
 {
     return guarded(ctx, [&] {
         require(ctx != nullptr, "ndfb_object_to_tangent: ctx is null");
-        check_image(width, height, count, object_normals, tangent_normals);
-        const SpaceSettings s = to_space(options);
-        const MeshInput m = mesh_input(mesh, NgonPolicy::refuse);
-        const std::vector<float> t = tangents_for(m, tangents, tangent_count, s.threads);
-        convert_normal_map(m, t, SpaceDirection::object_to_tangent, {object_normals, count}, int(width), int(height),
-                           s, {tangent_normals, count},
-                           coverage ? std::span<uint8_t>(coverage, size_t(width) * height) : std::span<uint8_t>());
+        convert_space(mesh, tangents, tangent_count, SpaceDirection::object_to_tangent, object_normals, width, height,
+                      count, options, tangent_normals, coverage);
     });
 }
 
@@ -225,13 +233,8 @@ NDFB_API ndfb_status ndfb_tangent_to_object(ndfb_context ctx, const ndfb_mesh* m
 {
     return guarded(ctx, [&] {
         require(ctx != nullptr, "ndfb_tangent_to_object: ctx is null");
-        check_image(width, height, count, tangent_normals, object_normals);
-        const SpaceSettings s = to_space(options);
-        const MeshInput m = mesh_input(mesh, NgonPolicy::refuse);
-        const std::vector<float> t = tangents_for(m, tangents, tangent_count, s.threads);
-        convert_normal_map(m, t, SpaceDirection::tangent_to_object, {tangent_normals, count}, int(width), int(height),
-                           s, {object_normals, count},
-                           coverage ? std::span<uint8_t>(coverage, size_t(width) * height) : std::span<uint8_t>());
+        convert_space(mesh, tangents, tangent_count, SpaceDirection::tangent_to_object, tangent_normals, width, height,
+                      count, options, object_normals, coverage);
     });
 }
 
