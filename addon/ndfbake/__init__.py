@@ -1,0 +1,43 @@
+"""ndfbake: normal maps that stay right at every distance (Han et al. 2007 vMF lobes).
+
+Install the ndfbake-<version>.zip the build leaves in its folder (Edit > Preferences > Add-ons >
+Install), or put this folder into a scripts path's addons/. The native library (libndfbake.so)
+lives beside this file; see native.py for where else it is looked for. Registering never fails
+for want of the library: the panel then shows why it cannot be used.
+
+Modules: native (ctypes), material_scan (finds the normal map), nodes (node groups),
+bake (the work), operators and ui (thin skins). Scripts call bake.py, or the operators
+bpy.ops.ndfbake.bake / bake_all / revert; examples/bake_blend.py is a command line.
+"""
+
+bl_info = {
+    "name": "ndfbake",
+    "author": "ndfbake",
+    "version": (0, 1, 0),          # = the CMake project version (tests check it against the library)
+    "blender": (3, 4, 0),
+    "location": "Properties > Material > ndfbake",
+    "description": "Filter normal maps by their normal distribution: lobe textures and node groups "
+                   "for EEVEE and Cycles",
+    "category": "Material",
+}
+
+if "bpy" in locals():
+    import importlib
+    for _module in (native, material_scan, nodes, bake, operators, ui):  # noqa: F821 (reload)
+        importlib.reload(_module)
+
+import bpy  # noqa: E402
+
+from . import bake, material_scan, native, nodes, operators, ui  # noqa: E402,F401
+
+
+def register():
+    for cls in ui.classes + operators.classes:
+        bpy.utils.register_class(cls)
+    bpy.types.Material.ndfbake_settings = bpy.props.PointerProperty(type=ui.NDFBakeSettings)
+
+
+def unregister():
+    del bpy.types.Material.ndfbake_settings
+    for cls in reversed(ui.classes + operators.classes):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,475 @@
+"""The work of the add-on, shared by the Bake button, the operators and command-line scripts.
+
+A bake has three steps, so that the UI can run the slow one on a worker thread:
+
+    job = prepare(material, settings)   # main thread: checks everything; changes nothing
+    job.run()  or  job.start()/poll     # any thread: the native bake into the lobe folder (no bpy)
+    result = finish(job)                # main thread: images, node group, bypass, bake record
+
+`bake_material()` runs the three in a row (scripts, `blender -b`). `revert()` undoes a bake:
+the Principled BSDF's links come back, the group node, node groups and lobe images go, and the
+lobe files and their folder are deleted.
+
+Files (choices the design leaves open):
+- The lobe textures go into a folder beside the .blend named after the material,
+  `//<material>.ndfbake/` (characters outside [A-Za-z0-9_.-] become '_'), and images refer to
+  them with relative paths, so the .blend and its folders move together. An unsaved .blend has no
+  "beside": baking it is refused (UNSAVED_BLEND). With `pack`, the level-0 textures are also
+  packed into the .blend (the files stay until Revert).
+- The library writes every level (level-of-detail work will use them) and report.json through a
+  staging folder renamed into place, so a failed or cancelled re-bake leaves the previous files;
+  a folder this bake created is removed again when the bake fails or is cancelled.
+- The node group samples level 0 only: EEVEE MIP-maps it by itself and the encoding is linear;
+  Cycles does no MIP-mapping and averages pixels.
+"""
+import json
+import os
+import re
+import threading
+import time
+from dataclasses import dataclass, field
+
+import bpy
+
+from . import material_scan, native, nodes
+
+RECORD_KEY = material_scan.RECORD_KEY
+RECORD_VERSION = 1
+FOLDER_SUFFIX = ".ndfbake"
+
+# Weights of the library's progress stages in the overall fraction (each reports 0..1).
+_STAGES = (("decode", 0.02), ("fit", 0.60), ("measure", 0.30), ("write", 0.08))
+
+
+@dataclass
+class BakeSettings:
+    max_lobes: int = 4          # 1..8 lobes per texel
+    tolerance: float = 0.0      # relative effective-BRDF error a texel may keep (0: max_lobes everywhere)
+    threads: int = 0            # 0: every core
+    pack: bool = False          # also pack the level-0 lobe textures into the .blend
+
+
+class BakeError(Exception):
+    """A bake or revert that did not happen. `code` is stable (tests, scripts); str() is for people."""
+
+    def __init__(self, code, message):
+        super().__init__(message)
+        self.code = code
+        self.message = message
+
+
+@dataclass
+class BakeResult:
+    material: str
+    folder: str                 # relative to the .blend ('//…')
+    lobes: int                  # lobe slots the node group shades
+    seconds: float
+    report: dict = field(default_factory=dict)
+    summary: str = ""
+
+
+def safe_name(name):
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip(".") or "material"
+
+
+def lobe_folder(material):
+    """('//<material>.ndfbake', absolute path); the absolute path is '' for an unsaved .blend."""
+    relative = "//" + safe_name(material.name) + FOLDER_SUFFIX
+    if not bpy.data.filepath:
+        return relative, ""
+    return relative, os.path.normpath(bpy.path.abspath(relative))
+
+
+def is_baked(material):
+    return material is not None and material_scan.record(material) is not None
+
+
+def settings_from_material(material):
+    """BakeSettings from the material's panel properties (defaults when the add-on is not registered)."""
+    # Reading the pointer property would create it (a change to the material): only read settings
+    # the user has set; the property group's defaults are BakeSettings' defaults.
+    if material is None or "ndfbake_settings" not in material.keys():
+        return BakeSettings()
+    props = getattr(material, "ndfbake_settings", None)
+    if props is None:
+        return BakeSettings()
+    return BakeSettings(max_lobes=props.max_lobes, tolerance=props.tolerance, pack=props.pack)
+
+
+# ---- step 1: prepare ------------------------------------------------------------------------------
+
+def prepare(material, settings=None):
+    """Checks the material and the library; returns a BakeJob or raises BakeError. Changes nothing."""
+    settings = settings or BakeSettings()
+    lib, message = native.status()
+    if lib is None:
+        raise BakeError("NO_LIBRARY", message)
+    scan = material_scan.scan(material)
+    if not scan.ok:
+        raise BakeError(scan.problem.code, scan.problem.message)
+    if not 1 <= settings.max_lobes <= native.MAX_LOBES:
+        raise BakeError("BAD_SETTINGS", "maximum lobes must be 1..%d, got %d" % (native.MAX_LOBES, settings.max_lobes))
+    if not 0.0 <= settings.tolerance <= 1.0:
+        raise BakeError("BAD_SETTINGS", "tolerance must be in [0, 1], got %g" % settings.tolerance)
+    relative, absolute = lobe_folder(material)
+    if not absolute:
+        raise BakeError("UNSAVED_BLEND", "save the .blend first: the lobe textures of '%s' are written beside it"
+                        % material.name)
+    if os.path.exists(absolute) and not os.path.isdir(absolute):
+        raise BakeError("OUTPUT_NOT_WRITABLE", "cannot write the lobe folder %s: a file of that name is in the way"
+                        % absolute)
+    return BakeJob(material_name=material.name, image_path=scan.image_path, folder=relative, out_dir=absolute,
+                   wrap=native.WRAP_REPEAT if scan.wrap == "REPEAT" else native.WRAP_CLAMP,
+                   roughness=min(max(scan.roughness, 0.01), 1.0), settings=settings,
+                   targets=[(t.principled, t.normal_map, t.image_texture) for t in scan.targets])
+
+
+# ---- step 2: the native bake (thread-safe: no bpy) ---------------------------------------------
+
+class BakeJob:
+    """The native part of a bake. run() works on any thread; start()/cancel()/done/progress let
+    a modal operator drive it from Blender's main thread."""
+
+    def __init__(self, material_name, image_path, folder, out_dir, wrap, roughness, settings, targets):
+        self.material_name = material_name
+        self.image_path = image_path
+        self.folder = folder
+        self.out_dir = out_dir
+        self.wrap = wrap
+        self.roughness = roughness
+        self.settings = settings
+        self.targets = targets
+        self.stage = ""
+        self.fraction = 0.0
+        self.seconds = 0.0
+        self.error = None        # BakeError after a failed run
+        self._cancel = threading.Event()
+        self._thread = None
+        self._done = threading.Event()
+
+    # Overall fraction from the library's (stage, fraction-of-stage).
+    def _overall(self, stage, fraction):
+        start = 0.0
+        for name, weight in _STAGES:
+            if name == stage:
+                return min(1.0, start + weight * max(0.0, min(1.0, fraction)))
+            start += weight
+        return self.fraction
+
+    def cancel(self):
+        self._cancel.set()
+
+    @property
+    def cancelled(self):
+        return self._cancel.is_set()
+
+    @property
+    def done(self):
+        return self._done.is_set()
+
+    def run(self, progress=None):
+        """The native bake. progress(stage, overall_fraction) may return True to cancel.
+        Raises BakeError; a folder this bake created is removed again on failure."""
+        try:
+            self._run(progress)
+        except BakeError as e:
+            self.error = e
+            raise
+        finally:
+            self._done.set()
+
+    def _run(self, progress):
+        lib, message = native.status()
+        if lib is None:
+            raise BakeError("NO_LIBRARY", message)
+        existed = os.path.isdir(self.out_dir)
+
+        def callback(stage, fraction):
+            self.stage = stage
+            self.fraction = self._overall(stage, fraction)
+            if progress is not None and progress(stage, self.fraction):
+                self._cancel.set()
+            return self._cancel.is_set()
+
+        start = time.perf_counter()
+        try:
+            if self._cancel.is_set():
+                raise native.Error(native.ERROR_CANCELLED, "NDFB_ERROR_CANCELLED", "cancelled before it started")
+            with lib.context() as ctx:
+                ctx.bake(self.image_path, self.out_dir, max_lobes=self.settings.max_lobes,
+                         tolerance=self.settings.tolerance, roughness=self.roughness, wrap=self.wrap,
+                         threads=self.settings.threads, progress=callback)
+        except native.Error as e:
+            if not existed:
+                _remove_empty_folder(self.out_dir)
+            raise _bake_error(e, self) from None
+        finally:
+            self.seconds = time.perf_counter() - start
+
+    def start(self):
+        """Runs the native bake on a worker thread; poll `done`, then call finish() on the main thread."""
+        def work():
+            try:
+                self.run()
+            except BakeError:
+                pass  # kept in self.error
+            except Exception as e:  # never lose a failure on the worker thread
+                self.error = BakeError("INTERNAL", "bake of '%s' failed: %s" % (self.material_name, e))
+                self._done.set()
+        self._thread = threading.Thread(target=work, name="ndfbake-" + self.material_name, daemon=True)
+        self._thread.start()
+
+    def join(self, timeout=None):
+        if self._thread is not None:
+            self._thread.join(timeout)
+
+
+def _bake_error(error, job):
+    name = job.material_name
+    if error.status == native.ERROR_CANCELLED:
+        return BakeError("CANCELLED", "bake of '%s' cancelled: no file and no node changed" % name)
+    if error.status == native.ERROR_IO:
+        return BakeError("OUTPUT_NOT_WRITABLE", "cannot write the lobe folder %s: %s" % (job.out_dir, error.message))
+    if error.status == native.ERROR_FILE_NOT_FOUND:
+        return BakeError("MISSING_FILE", error.message)
+    if error.status in (native.ERROR_UNSUPPORTED_FORMAT, native.ERROR_CORRUPT_FILE):
+        return BakeError("BAD_IMAGE", "the normal map of '%s' cannot be read: %s" % (name, error.message))
+    if error.status == native.ERROR_OUT_OF_MEMORY:
+        return BakeError("TOO_LARGE", error.message)
+    return BakeError("NATIVE_ERROR", "%s (%s)" % (error.message, error.status_name))
+
+
+def _remove_empty_folder(path):
+    try:
+        os.rmdir(path)
+    except OSError:
+        pass
+
+
+# ---- step 3: finish (main thread) ----------------------------------------------------------------
+
+def _read_report(out_dir):
+    try:
+        with open(os.path.join(out_dir, "report.json"), encoding="utf-8") as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return {}
+
+
+def _level0_lobes(out_dir):
+    pattern = re.compile(r"level00_lobe(\d+)\.exr$")
+    indices = sorted(int(m.group(1)) for m in (pattern.match(n) for n in os.listdir(out_dir)) if m)
+    return [os.path.join(out_dir, "level00_lobe%d.exr" % j) for j in indices]
+
+
+def _relative(path):
+    try:
+        return bpy.path.relpath(path)
+    except ValueError:  # another drive
+        return path
+
+
+def _load_lobe_images(material_name, paths, pack):
+    """Level-0 lobe images (Non-Color, channel-packed alpha: A is data, α·r_z), named
+    "<material> lobe j" when this call creates them. Returns the images and the names of those
+    this call created."""
+    images, created = [], []
+    before = set(bpy.data.images)
+    for j, path in enumerate(paths):
+        image = bpy.data.images.load(path, check_existing=True)
+        if image not in before:
+            image.name = "%s lobe %d" % (material_name, j)
+            image[nodes.TAG] = nodes.GROUP_VERSION
+            created.append(image.name)
+        else:
+            image.reload()  # a re-bake replaced the file
+        image.filepath = _relative(path)
+        image.colorspace_settings.name = "Non-Color"
+        image.alpha_mode = "CHANNEL_PACKED"
+        if pack:
+            image.pack()
+        images.append(image)
+    return images, created
+
+
+def summarize(report, seconds, lobes):
+    levels = report.get("levels", [])
+    means = []
+    for level in levels:
+        histogram = level.get("lobe_histogram", [])
+        texels = sum(histogram)
+        means.append(sum(k * n for k, n in enumerate(histogram)) / texels if texels else 0.0)
+
+    def mean_of(key):
+        values = [lv.get(key, {}).get("mean") for lv in levels if lv.get(key)]
+        values = [v for v in values if v is not None]
+        return sum(values) / len(values) if values else float("nan")
+
+    return ("%d lobe%s, %d levels, lobes per texel by level: %s; error %.3f (single vMF %.3f, Toksvig %.3f); %.1f s"
+            % (lobes, "" if lobes == 1 else "s", len(levels), " ".join("%.1f" % m for m in means),
+               mean_of("error"), mean_of("error_single_vmf"), mean_of("error_toksvig"), seconds))
+
+
+def finish(job):
+    """After a successful run(): loads the level-0 lobe textures, builds the node group, bypasses
+    the Principled BSDF(s) and stores the bake record. Replaces a previous bake's nodes."""
+    if job.error is not None:
+        raise job.error
+    material = bpy.data.materials.get(job.material_name)
+    if material is None or material.node_tree is None:
+        raise BakeError("MATERIAL_GONE", "material '%s' went away during the bake" % job.material_name)
+    tree = material.node_tree
+    for principled, normal_map, texture in job.targets:
+        if any(tree.nodes.get(n) is None for n in (principled, normal_map, texture)):
+            raise BakeError("MATERIAL_CHANGED", "the nodes of '%s' changed during the bake; bake again"
+                            % material.name)
+    paths = _level0_lobes(job.out_dir)
+    if not paths:
+        raise BakeError("NATIVE_ERROR", "the bake wrote no lobe texture into %s" % job.out_dir)
+    report = _read_report(job.out_dir)
+
+    old = material_scan.record(material)
+    old_images = []
+    if old:
+        _remove_nodes(material, old)
+        old_images = old.get("images", [])
+
+    targets, images, created = [], [], []
+    try:
+        images, created = _load_lobe_images(material.name, paths, job.settings.pack)
+        for principled_name, normal_map_name, texture_name in job.targets:
+            principled = tree.nodes[principled_name]
+            normal_map = tree.nodes[normal_map_name]
+            texture = tree.nodes[texture_name]
+            group = nodes.build_material_group("NDFB " + material.name, principled, normal_map, texture, images)
+            targets.append({"principled": principled_name, "group_node": "", "node_group": group.name,
+                            "bypassed": []})
+            node, bypassed = nodes.insert_group_node(tree, group, principled, normal_map, texture)
+            targets[-1].update(group_node=node.name, bypassed=bypassed)
+    except Exception as e:
+        # A bug, not bad input: put the material back as it was before any bake, drop this bake's
+        # images and files, and say so (no half-built material is left behind).
+        _remove_nodes(material, {"targets": targets})
+        _remove_images(sorted(set(created) | set(old_images)))
+        if RECORD_KEY in material.keys():
+            del material[RECORD_KEY]
+        _delete_bake_files(job.out_dir, os.listdir(job.out_dir))
+        raise BakeError("INTERNAL", "building the node group of '%s' failed (%s: %s); the material is as it was "
+                        "before baking" % (material.name, type(e).__name__, e)) from e
+
+    # Images of the previous bake that this one did not reuse (fewer lobes now).
+    keep = {im.name for im in images}
+    still_ours = [name for name in old_images if name in keep]
+    _remove_images([name for name in old_images if name not in keep])
+
+    files = report.get("files") or sorted(os.listdir(job.out_dir))
+    summary = summarize(report, job.seconds, len(images))
+    rec = {
+        "version": RECORD_VERSION,
+        "folder": job.folder,
+        "files": [f for f in files if _is_bake_file(f)],
+        "images": sorted(set(created) | set(still_ours)),
+        "targets": targets,
+        "lobes": len(images),
+        "packed": bool(job.settings.pack),
+        "summary": summary,
+        "settings": {"max_lobes": job.settings.max_lobes, "tolerance": job.settings.tolerance,
+                     "roughness": job.roughness},
+    }
+    material[RECORD_KEY] = json.dumps(rec)
+    return BakeResult(material=material.name, folder=job.folder, lobes=len(images), seconds=job.seconds,
+                      report=report, summary=summary)
+
+
+def _is_bake_file(name):
+    return name == "report.json" or re.fullmatch(r"level\d+_(lobe|color)\d+\.exr", name) is not None
+
+
+# ---- whole bakes ---------------------------------------------------------------------------------
+
+def bake_material(material, settings=None, progress=None):
+    """prepare + run + finish on the calling thread (scripts, `blender -b`, operator execute())."""
+    job = prepare(material, settings)
+    job.run(progress)
+    return finish(job)
+
+
+def materials_needing_bake(scene):
+    """Materials with a normal-map chain on objects the scene renders, in name order."""
+    found = {}
+    for obj in scene.objects:
+        if obj.hide_render or obj.type not in {"MESH", "CURVE", "SURFACE", "META", "FONT"}:
+            continue
+        for slot in obj.material_slots:
+            material = slot.material
+            if material is not None and material.name not in found and material_scan.uses_normal_map(material):
+                found[material.name] = material
+    return [found[name] for name in sorted(found)]
+
+
+def bake_materials(materials, settings_for=None, progress=None):
+    """Bakes each material; returns [(material name, BakeResult or BakeError)]. One failure does not
+    stop the others; each failure leaves its material and files unchanged."""
+    outcomes = []
+    for material in materials:
+        settings = settings_for(material) if settings_for else settings_from_material(material)
+        try:
+            outcomes.append((material.name, bake_material(material, settings, progress)))
+        except BakeError as e:
+            outcomes.append((material.name, e))
+    return outcomes
+
+
+# ---- revert --------------------------------------------------------------------------------------
+
+def _remove_nodes(material, rec):
+    tree = material.node_tree
+    used = []
+    for target in rec.get("targets", []):
+        bypassed = [tuple(b) for b in target.get("bypassed", [])]
+        group = nodes.remove_group_node(tree, target["group_node"], target["principled"], bypassed)
+        if group is not None:
+            used.append(group.name)
+        used.append(target.get("node_group", ""))
+    nodes.remove_unused_groups(used)
+
+
+def _remove_images(names):
+    for name in names:
+        image = bpy.data.images.get(name)
+        if image is not None and image.get(nodes.TAG) is not None and image.users == 0:
+            bpy.data.images.remove(image)
+
+
+def revert(material):
+    """Restores the material as it was before the bake and deletes the lobe files and their folder.
+    Returns (files removed, [files that could not be removed])."""
+    rec = material_scan.record(material) if material is not None else None
+    if rec is None:
+        raise BakeError("NOT_BAKED", "material '%s' has no ndfbake bake to revert" % (
+            material.name if material is not None else ""))
+    _remove_nodes(material, rec)
+    _remove_images(rec.get("images", []))
+    folder = bpy.path.abspath(rec.get("folder", "")) if rec.get("folder") else ""
+    removed, left = _delete_bake_files(folder, rec.get("files", []))
+    del material[RECORD_KEY]
+    return removed, left
+
+
+def _delete_bake_files(folder, names):
+    """Deletes the bake's own files (never anything else) and then the folder if it is empty."""
+    removed, left = 0, []
+    if folder and os.path.isdir(folder):
+        for name in names:
+            if not _is_bake_file(name):
+                continue
+            path = os.path.join(folder, name)
+            try:
+                os.remove(path)
+                removed += 1
+            except FileNotFoundError:
+                pass
+            except OSError as e:
+                left.append("%s (%s)" % (path, e.strerror))
+        _remove_empty_folder(folder)
+    return removed, left

@@ -1,0 +1,227 @@
+"""Find the normal-map chain of a material and say what stands in the way of baking it.
+
+The chain ndfbake filters is the one Blender users build for a tangent-space normal map:
+
+    Image Texture (Color) -> Normal Map (tangent space, Color) -> Principled BSDF (Normal)
+
+Reroute nodes between them are followed. Only Principled BSDFs that reach an active Material
+Output (through any shader nodes) count, so stray nodes do not make a material "need" a bake. Once
+a material is baked its Principled BSDFs are bypassed (no longer reach the output); the bake record
+names them, so re-baking scans the same nodes.
+
+Choices the design leaves open, made here:
+- One normal-map image per material. Several Principled BSDFs may share it (each gets its own
+  filtered group); two different images are refused (SEVERAL_IMAGES): the lobe folder is named
+  after the material, and the library's commit step owns the whole folder.
+- The image must be a file on disk that the library can read: packed, generated, movie, sequence
+  and UDIM images are refused with a message saying what to do, and nothing changes.
+- The Image datablock's colour space must be data (Non-Color, Raw or Linear). An sRGB-tagged
+  normal map is refused (COLOR_SPACE), not baked raw: Blender renders such a material with the
+  sRGB curve removed, so neither reading of the file would match both what the user sees now and
+  what they meant; the fix is one click (Color Space -> Non-Color) and the message names it. This
+  keeps the rule that a bad input changes nothing in the file.
+- The base BRDF is Blender's GGX with the Principled BSDF's Roughness. A linked Roughness
+  (a texture) cannot be one number: the fit then uses 0.5 for its lobe budget and report, and the
+  node group still widens each lobe from the per-pixel roughness at shading time.
+"""
+import os
+from dataclasses import dataclass, field
+
+import bpy
+
+RECORD_KEY = "ndfbake_bake"
+# Colour spaces whose transform is the identity on the stored values (is_data covers the first two).
+DATA_COLOR_SPACES = {"Non-Color", "Raw", "Linear"}
+DEFAULT_LINKED_ROUGHNESS = 0.5
+
+
+@dataclass
+class Problem:
+    code: str
+    message: str
+
+
+@dataclass
+class Target:
+    """One Principled BSDF fed by the normal map: what the node group replaces."""
+    principled: str
+    normal_map: str
+    image_texture: str
+
+
+@dataclass
+class ScanResult:
+    material: str
+    targets: list = field(default_factory=list)
+    image: object = None           # bpy.types.Image
+    image_path: str = ""           # absolute path of the file the library reads
+    wrap: str = "REPEAT"           # the Image Texture's extension
+    roughness: float = 0.5
+    roughness_linked: bool = False
+    problems: list = field(default_factory=list)
+
+    @property
+    def ok(self):
+        return not self.problems
+
+    @property
+    def problem(self):
+        return self.problems[0] if self.problems else None
+
+
+def _upstream(socket):
+    """The node and output socket feeding `socket`, through reroutes; (None, None) if unlinked."""
+    seen = set()
+    while socket is not None and socket.is_linked:
+        link = socket.links[0]
+        node = link.from_node
+        if node.bl_idname == "NodeReroute" and node.name not in seen:
+            seen.add(node.name)
+            socket = node.inputs[0]
+            continue
+        return node, link.from_socket
+    return None, None
+
+
+def active_outputs(tree):
+    return [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial" and n.is_active_output]
+
+
+def reachable_principled(tree):
+    """Principled BSDF nodes that feed an active Material Output's Surface, in a stable order."""
+    found, stack, seen = [], [], set()
+    for output in active_outputs(tree):
+        stack.append(output.inputs["Surface"])
+    while stack:
+        socket = stack.pop()
+        for link in socket.links:
+            node = link.from_node
+            if node.name in seen:
+                continue
+            seen.add(node.name)
+            if node.bl_idname == "ShaderNodeBsdfPrincipled":
+                found.append(node)
+            else:
+                stack.extend(s for s in node.inputs if s.is_linked and s.type == "SHADER")
+                if node.bl_idname == "NodeReroute":
+                    stack.extend(node.inputs)
+    return sorted(found, key=lambda n: n.name)
+
+
+def record(material):
+    """The bake record stored on the material (a dict), or None."""
+    import json
+    raw = material.get(RECORD_KEY)
+    if not raw:
+        return None
+    try:
+        return json.loads(raw)
+    except (TypeError, ValueError):
+        return None
+
+
+def image_file_path(image):
+    """Absolute path of an image's file, as Blender resolves it (library-relative paths too)."""
+    return os.path.normpath(bpy.path.abspath(image.filepath, library=image.library))
+
+
+def check_image(image, node_name):
+    """The first problem that keeps the library from reading `image` as a normal map, or None."""
+    if image is None:
+        return Problem("NO_IMAGE", "Image Texture '%s' has no image" % node_name)
+    name = image.name
+    if image.source == "GENERATED":
+        return Problem("GENERATED_IMAGE", "image '%s' is generated in Blender, not a file: save it as a file "
+                                          "(Image > Save As) and bake again" % name)
+    if image.packed_file is not None:
+        return Problem("PACKED_IMAGE", "image '%s' is packed into the .blend: unpack it to a file "
+                                       "(Image > Unpack) so ndfbake can read it" % name)
+    if image.source != "FILE":
+        return Problem("UNSUPPORTED_SOURCE", "image '%s' is a %s, not a single image file" % (
+            name, image.source.lower()))
+    path = image_file_path(image)
+    if not image.filepath or not os.path.isfile(path):
+        return Problem("MISSING_FILE", "the file of image '%s' is missing: %s" % (name, path or "(no path)"))
+    colorspace = image.colorspace_settings.name
+    if not image.colorspace_settings.is_data and colorspace not in DATA_COLOR_SPACES:
+        return Problem("COLOR_SPACE", "image '%s' has Color Space '%s': a normal map is data, set its Color "
+                                      "Space to Non-Color (ndfbake does not guess which decoding you meant)" % (
+                                          name, colorspace))
+    return None
+
+
+def scan(material):
+    """Everything bake.py needs to know about `material`, or the problems that stop it."""
+    result = ScanResult(material=material.name if material else "")
+    if material is None:
+        result.problems.append(Problem("NO_MATERIAL", "no active material"))
+        return result
+    if not material.use_nodes or material.node_tree is None:
+        result.problems.append(Problem("NO_NODES", "material '%s' does not use nodes" % material.name))
+        return result
+    tree = material.node_tree
+    rec = record(material)
+    if rec:
+        principled = [tree.nodes.get(t["principled"]) for t in rec.get("targets", [])]
+        principled = [p for p in principled if p is not None]
+    else:
+        if not active_outputs(tree):
+            result.problems.append(Problem("NO_OUTPUT", "material '%s' has no active Material Output" % material.name))
+            return result
+        principled = reachable_principled(tree)
+        if not principled:
+            result.problems.append(Problem(
+                "NO_PRINCIPLED", "material '%s' has no Principled BSDF reaching its output" % material.name))
+            return result
+
+    normal_maps = []
+    for p in principled:
+        node, _ = _upstream(p.inputs["Normal"])
+        if node is not None and node.bl_idname == "ShaderNodeNormalMap":
+            normal_maps.append((p, node))
+    if not normal_maps:
+        result.problems.append(Problem(
+            "NO_NORMAL_MAP", "material '%s' has no normal map: no Principled BSDF takes its Normal from a "
+                             "Normal Map node" % material.name))
+        return result
+
+    images = {}
+    for p, nm in normal_maps:
+        if nm.space != "TANGENT":
+            result.problems.append(Problem(
+                "NOT_TANGENT_SPACE", "Normal Map node '%s' is set to %s: ndfbake filters tangent-space normal "
+                                     "maps only" % (nm.name, nm.bl_rna.properties["space"].enum_items[nm.space].name)))
+            return result
+        tex, out = _upstream(nm.inputs["Color"])
+        if tex is None or tex.bl_idname != "ShaderNodeTexImage" or out.name != "Color":
+            result.problems.append(Problem(
+                "NO_IMAGE_TEXTURE", "Normal Map node '%s' does not take its Color from an Image Texture node" % nm.name))
+            return result
+        problem = check_image(tex.image, tex.name)
+        if problem:
+            result.problems.append(problem)
+            return result
+        images.setdefault(tex.image.name, tex.image)
+        result.targets.append(Target(principled=p.name, normal_map=nm.name, image_texture=tex.name))
+    if len(images) > 1:
+        result.problems.append(Problem(
+            "SEVERAL_IMAGES", "material '%s' uses %d normal-map images (%s): ndfbake bakes one per material" % (
+                material.name, len(images), ", ".join(sorted(images)))))
+        return result
+
+    result.image = next(iter(images.values()))
+    result.image_path = image_file_path(result.image)
+    first_tex = tree.nodes[result.targets[0].image_texture]
+    result.wrap = first_tex.extension
+    first = tree.nodes[result.targets[0].principled]
+    rough = first.inputs["Roughness"]
+    result.roughness_linked = rough.is_linked
+    result.roughness = DEFAULT_LINKED_ROUGHNESS if rough.is_linked else float(rough.default_value)
+    return result
+
+
+def uses_normal_map(material):
+    """True if the material has a Normal Map node chain worth baking (problems or not)."""
+    res = scan(material)
+    return res.ok or (res.problem.code not in ("NO_MATERIAL", "NO_NODES", "NO_OUTPUT", "NO_PRINCIPLED",
+                                                "NO_NORMAL_MAP"))

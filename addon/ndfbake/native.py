@@ -1,0 +1,345 @@
+"""ctypes access to libndfbake (native/include/ndfbake.h): no bpy here.
+
+The library is looked for, in order:
+1. the file named by the environment variable NDFBAKE_LIBRARY (tests, development);
+2. libndfbake.so inside this add-on's folder (what the ndfbake-<version>.zip from the build carries);
+3. build/native/libndfbake.so of the source checkout this folder sits in (addon/ndfbake used
+   straight from the repository after `bash scripts/build.sh`); only inside a checkout.
+
+Loading never raises out of `status()`: a missing library, one that cannot be loaded (a missing
+OpenImageIO, say) or one of another ABI gives a single readable message that the UI shows in
+place of the Bake button. `load()` raises LibraryError with that same message.
+
+Calls into the library release the GIL (ctypes.CDLL), so a bake can run on a worker thread; the
+progress callback then runs on that worker thread (the library calls it on the calling thread) and
+must not touch bpy. Each thread uses its own Context (a context is single-threaded).
+"""
+import ctypes
+import os
+import threading
+
+# The ABI this module's structures and signatures are written against (ndfb_abi_version()).
+ABI_VERSION = 1
+MAX_LOBES = 8  # NDFB_MAX_LOBES
+
+# ndfb_status
+OK = 0
+ERROR_INVALID_ARGUMENT = 1
+ERROR_FILE_NOT_FOUND = 2
+ERROR_UNSUPPORTED_FORMAT = 3
+ERROR_CORRUPT_FILE = 4
+ERROR_IO = 5
+ERROR_OUT_OF_MEMORY = 6
+ERROR_CANCELLED = 7
+ERROR_INTERNAL = 8
+
+# enums
+CONVENTION_OPENGL, CONVENTION_DIRECTX = 0, 1
+WRAP_REPEAT, WRAP_CLAMP = 0, 1
+BRDF_GGX, BRDF_BLINN_PHONG, BRDF_LAMBERT, BRDF_BECKMANN = 0, 1, 2, 3
+PRECISION_HALF, PRECISION_FLOAT = 0, 1
+SRGB_AS_DATA, SRGB_LINEARIZE = 0, 1
+FIT_PER_LEVEL, FIT_HIERARCHICAL = 0, 1
+
+LIBRARY_NAME = "libndfbake.so"
+ENV_VARIABLE = "NDFBAKE_LIBRARY"
+
+# Room for any version of an option structure the library's *_init may write (see init_options).
+_SCRATCH_BYTES = 4096
+
+PROGRESS_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_float)
+
+
+class DecodeOptions(ctypes.Structure):
+    _fields_ = [
+        ("struct_size", ctypes.c_uint32),
+        ("convention", ctypes.c_int),
+        ("srgb", ctypes.c_int),
+        ("max_pixels", ctypes.c_uint64),
+    ]
+
+
+class FitOptions(ctypes.Structure):
+    _fields_ = [
+        ("struct_size", ctypes.c_uint32),
+        ("max_lobes", ctypes.c_uint32),
+        ("tolerance", ctypes.c_float),
+        ("brdf", ctypes.c_int),
+        ("brdf_parameter", ctypes.c_float),
+        ("wrap", ctypes.c_int),
+        ("align", ctypes.c_int32),
+        ("alignment_strength", ctypes.c_float),
+        ("max_iterations", ctypes.c_uint32),
+        ("method", ctypes.c_int),
+        ("threads", ctypes.c_uint32),
+        ("progress", PROGRESS_FN),
+        ("progress_user", ctypes.c_void_p),
+    ]
+
+
+class WriteOptions(ctypes.Structure):
+    _fields_ = [
+        ("struct_size", ctypes.c_uint32),
+        ("precision", ctypes.c_int),
+        ("color_path", ctypes.c_char_p),
+        ("source_name", ctypes.c_char_p),
+    ]
+
+
+class Error(Exception):
+    """A failed library call: status code, its name (NDFB_ERROR_...) and the library's message."""
+
+    def __init__(self, status, status_name, message):
+        super().__init__("%s: %s" % (status_name, message) if message else status_name)
+        self.status = status
+        self.status_name = status_name
+        self.message = message
+
+
+class LibraryError(Exception):
+    """The library is missing, cannot be loaded, or is of another ABI. str() is the UI message."""
+
+
+def _encode(path):
+    return os.fsencode(path)
+
+
+def candidate_paths():
+    here = os.path.dirname(os.path.abspath(__file__))
+    paths = []
+    env = os.environ.get(ENV_VARIABLE)
+    if env:
+        paths.append(env)
+    paths.append(os.path.join(here, LIBRARY_NAME))
+    checkout = os.path.normpath(os.path.join(here, "..", ".."))
+    if os.path.isfile(os.path.join(checkout, "native", "include", "ndfbake.h")):  # a source checkout
+        paths.append(os.path.join(checkout, "build", "native", LIBRARY_NAME))
+    return paths
+
+
+class Library:
+    """The loaded library with the signatures this add-on calls declared."""
+
+    def __init__(self, path, expected_abi=ABI_VERSION):
+        try:
+            lib = ctypes.CDLL(path)
+        except OSError as e:
+            raise LibraryError("the native library %s could not be loaded (%s)" % (path, e)) from None
+        try:
+            lib.ndfb_abi_version.restype = ctypes.c_uint32
+            lib.ndfb_abi_version.argtypes = []
+        except AttributeError:
+            raise LibraryError("%s is not the ndfbake library (no ndfb_abi_version)" % path) from None
+        abi = lib.ndfb_abi_version()
+        if abi != expected_abi:
+            raise LibraryError(
+                "the native library %s has ABI version %d, this add-on needs %d; "
+                "install the add-on zip built with that library" % (path, abi, expected_abi))
+        self.path = path
+        self.lib = lib
+        self._declare()
+        self.version = lib.ndfb_version().decode()
+        self._check_struct_sizes()
+
+    def _declare(self):
+        lib = self.lib
+        c = ctypes
+        vp = c.c_void_p
+        sig = {
+            "ndfb_version": (c.c_char_p, []),
+            "ndfb_context_create": (c.c_int, [c.POINTER(vp)]),
+            "ndfb_context_destroy": (None, [vp]),
+            "ndfb_last_error": (c.c_char_p, [vp]),
+            "ndfb_status_name": (c.c_char_p, [c.c_int]),
+            "ndfb_decode_options_init": (None, [c.POINTER(DecodeOptions)]),
+            "ndfb_fit_options_init": (None, [c.POINTER(FitOptions)]),
+            "ndfb_write_options_init": (None, [c.POINTER(WriteOptions)]),
+            "ndfb_bake": (c.c_int, [vp, c.c_char_p, c.c_char_p, c.POINTER(DecodeOptions),
+                                    c.POINTER(FitOptions), c.POINTER(WriteOptions)]),
+            "ndfb_synthesize": (c.c_int, [vp, c.c_char_p, c.c_uint32, c.c_uint32, c.c_uint32, c.POINTER(vp)]),
+            "ndfb_normal_map_save": (c.c_int, [vp, vp, c.c_char_p]),
+            "ndfb_normal_map_destroy": (None, [vp]),
+            "ndfb_describe_image": (c.c_int, [vp, c.c_char_p, c.c_char_p, c.c_size_t, c.POINTER(c.c_size_t)]),
+        }
+        for name, (restype, argtypes) in sig.items():
+            try:
+                fn = getattr(lib, name)
+            except AttributeError:
+                raise LibraryError("the native library %s lacks %s; rebuild it" % (self.path, name)) from None
+            fn.restype = restype
+            fn.argtypes = argtypes
+
+    def _check_struct_sizes(self):
+        # Every *_init must work (a library without them is not one we can drive).
+        for struct, init in ((DecodeOptions, self.lib.ndfb_decode_options_init),
+                             (FitOptions, self.lib.ndfb_fit_options_init),
+                             (WriteOptions, self.lib.ndfb_write_options_init)):
+            options = self.init_options(struct, init)
+            if options.struct_size < ctypes.sizeof(ctypes.c_uint32):
+                raise LibraryError("%s's %s has no size" % (self.path, init.__name__))
+
+    @staticmethod
+    def init_options(struct, init):
+        """An option structure filled by the library's *_init, by the header's versioning rule:
+        the library writes its own (possibly larger, newer) structure into a scratch buffer large
+        enough for any version, and struct_size is then set to what both sides know, so a newer
+        library keeps its defaults for fields this module does not declare, and an older one is
+        never told of fields it lacks."""
+        scratch = (ctypes.c_char * _SCRATCH_BYTES)()
+        init(ctypes.cast(scratch, ctypes.POINTER(struct)))
+        options = struct.from_buffer_copy(scratch, 0)
+        options.struct_size = min(options.struct_size, ctypes.sizeof(struct))
+        return options
+
+    def status_name(self, status):
+        name = self.lib.ndfb_status_name(status)
+        return name.decode() if name else "NDFB_STATUS_%d" % status
+
+    def context(self):
+        return Context(self)
+
+
+class NormalMap:
+    def __init__(self, context, handle):
+        self._context = context
+        self.handle = handle
+
+    def save(self, path):
+        self._context.check(self._context.lib.lib.ndfb_normal_map_save(self._context.handle, self.handle,
+                                                                       _encode(path)))
+
+    def close(self):
+        if self.handle:
+            self._context.lib.lib.ndfb_normal_map_destroy(self.handle)
+            self.handle = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+class Context:
+    """One ndfb_context: use it from one thread at a time."""
+
+    def __init__(self, lib):
+        self.lib = lib
+        handle = ctypes.c_void_p()
+        status = lib.lib.ndfb_context_create(ctypes.byref(handle))
+        if status != OK:
+            raise Error(status, lib.status_name(status), (lib.lib.ndfb_last_error(None) or b"").decode())
+        self.handle = handle
+
+    def close(self):
+        if self.handle:
+            self.lib.lib.ndfb_context_destroy(self.handle)
+            self.handle = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass
+
+    def check(self, status):
+        if status != OK:
+            message = self.lib.lib.ndfb_last_error(self.handle) or b""
+            raise Error(status, self.lib.status_name(status), message.decode(errors="replace"))
+
+    def bake(self, input_path, out_dir, *, max_lobes=4, tolerance=0.0, roughness=0.5, wrap=WRAP_REPEAT,
+             threads=0, srgb=SRGB_AS_DATA, convention=CONVENTION_OPENGL, progress=None, source_name=None):
+        """ndfb_bake with a GGX base BRDF of Blender roughness `roughness`.
+
+        progress(stage, fraction) -> bool: return True to cancel. Exceptions inside it cancel too.
+        Raises Error on failure (status ERROR_CANCELLED when progress asked to stop)."""
+        lib = self.lib.lib
+        decode = Library.init_options(DecodeOptions, lib.ndfb_decode_options_init)
+        decode.convention = convention
+        decode.srgb = srgb
+        fit = Library.init_options(FitOptions, lib.ndfb_fit_options_init)
+        fit.max_lobes = int(max_lobes)
+        fit.tolerance = float(tolerance)
+        fit.brdf = BRDF_GGX
+        fit.brdf_parameter = float(roughness)
+        fit.wrap = wrap
+        fit.threads = int(threads)
+        callback = None
+        if progress is not None:
+            def trampoline(_user, stage, fraction):
+                try:
+                    return 1 if progress(stage.decode() if stage else "", float(fraction)) else 0
+                except BaseException:  # never let an exception unwind through C: cancel instead
+                    return 1
+            callback = PROGRESS_FN(trampoline)  # kept alive by this frame for the whole call
+            fit.progress = callback
+        write = Library.init_options(WriteOptions, lib.ndfb_write_options_init)
+        name = _encode(source_name) if source_name else None
+        write.source_name = name
+        self.check(lib.ndfb_bake(self.handle, _encode(input_path), _encode(out_dir), ctypes.byref(decode),
+                                 ctypes.byref(fit), ctypes.byref(write)))
+        del callback
+
+    def synthesize(self, pattern, width, height, seed=1):
+        handle = ctypes.c_void_p()
+        self.check(self.lib.lib.ndfb_synthesize(self.handle, pattern.encode(), width, height, seed,
+                                                ctypes.byref(handle)))
+        return NormalMap(self, handle)
+
+    def describe_image(self, path):
+        length = ctypes.c_size_t()
+        self.check(self.lib.lib.ndfb_describe_image(self.handle, _encode(path), None, 0, ctypes.byref(length)))
+        buffer = ctypes.create_string_buffer(length.value + 1)
+        self.check(self.lib.lib.ndfb_describe_image(self.handle, _encode(path), buffer, len(buffer), None))
+        return buffer.value.decode(errors="replace")
+
+
+_lock = threading.Lock()
+_loaded = None   # Library
+_failure = None  # LibraryError message
+
+
+def load():
+    """The library, loaded once; raises LibraryError (a one-line message) if it cannot be used."""
+    global _loaded, _failure
+    with _lock:
+        if _loaded is not None:
+            return _loaded
+        if _failure is not None:
+            raise LibraryError(_failure)
+        tried = []
+        for path in candidate_paths():
+            if not os.path.isfile(path):
+                tried.append(path)
+                continue
+            try:
+                _loaded = Library(path)
+                return _loaded
+            except LibraryError as e:
+                _failure = str(e)  # a library that is there but unusable: say why, do not look further
+                raise
+        _failure = ("native library not found (looked for %s); install the ndfbake-<version>.zip "
+                    "from the build folder, or set %s" % (", ".join(tried), ENV_VARIABLE))
+        raise LibraryError(_failure)
+
+
+def status():
+    """(library or None, message): never raises. The message is '' when the library is usable."""
+    try:
+        return load(), ""
+    except LibraryError as e:
+        return None, str(e)
+
+
+def reset():
+    """Forget the loaded library or the failure (tests; after installing a library)."""
+    global _loaded, _failure
+    with _lock:
+        _loaded = None
+        _failure = None

@@ -1,0 +1,90 @@
+"""The Material Properties panel and the per-material settings: a thin skin over bake.py."""
+import textwrap
+
+import bpy
+from bpy.props import BoolProperty, FloatProperty, IntProperty
+
+from . import bake, material_scan, native, nodes, operators
+
+
+class NDFBakeSettings(bpy.types.PropertyGroup):
+    max_lobes: IntProperty(name="Maximum Lobes", description="vMF lobes per texel at most (each costs a "
+                           "BSDF in the node group)", default=4, min=1, max=native.MAX_LOBES)
+    tolerance: FloatProperty(name="Tolerance", description="Relative effective-BRDF error a texel may keep: "
+                             "fewer lobes where it suffices (0: the maximum everywhere)",
+                             default=0.0, min=0.0, max=1.0, precision=3, step=1)
+    pack: BoolProperty(name="Pack Textures", description="Also pack the lobe textures into the .blend",
+                       default=False)
+
+
+def _wrapped(layout, text, icon="NONE", width=60):
+    lines = textwrap.wrap(text, width, break_on_hyphens=False) or [""]
+    column = layout.column(align=True)
+    for i, line in enumerate(lines):
+        column.label(text=line, icon=icon if i == 0 else "BLANK1")
+
+
+class NDFBAKE_PT_material(bpy.types.Panel):
+    bl_label = "ndfbake"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "material"
+
+    @classmethod
+    def poll(cls, context):
+        return getattr(context, "material", None) is not None
+
+    def draw(self, context):
+        layout = self.layout
+        material = context.material
+        lib, message = native.status()
+        if lib is None:
+            _wrapped(layout.box(), message, icon="ERROR")
+            return
+
+        job = operators.running_job
+        if job is not None:
+            box = layout.box()
+            box.label(text="Baking '%s': %s %d%%" % (job.material_name, job.stage or "starting",
+                                                     int(job.fraction * 100)), icon="TIME")
+            box.label(text="Esc cancels", icon="BLANK1")
+
+        scan = material_scan.scan(material)
+        box = layout.box()
+        if scan.ok:
+            nm = material.node_tree.nodes[scan.targets[0].normal_map]
+            box.label(text="Normal map: %s" % scan.image.name, icon="IMAGE_DATA")
+            box.label(text="%s, tangent space, UV %s" % (nm.name, nm.uv_map or "(active render)"), icon="BLANK1")
+            if scan.roughness_linked:
+                box.label(text="Base BRDF: GGX, roughness linked (per pixel; fit uses %.2f)" % scan.roughness,
+                          icon="SHADING_RENDERED")
+            else:
+                box.label(text="Base BRDF: GGX, roughness %.3f" % scan.roughness, icon="SHADING_RENDERED")
+        else:
+            _wrapped(box, scan.problem.message, icon="ERROR")
+
+        settings = material.ndfbake_settings
+        column = layout.column()
+        column.prop(settings, "max_lobes")
+        column.prop(settings, "tolerance")
+        column.prop(settings, "pack")
+
+        baked = bake.is_baked(material)
+        row = layout.row(align=True)
+        bake_row = row.row(align=True)
+        bake_row.enabled = scan.ok and job is None
+        bake_row.operator(operators.NDFBAKE_OT_bake.bl_idname, text="Re-bake" if baked else "Bake",
+                          icon="RENDER_STILL")
+        revert_row = row.row(align=True)
+        revert_row.enabled = baked and job is None
+        revert_row.operator(operators.NDFBAKE_OT_revert.bl_idname, icon="LOOP_BACK")
+        layout.operator(operators.NDFBAKE_OT_bake_all.bl_idname, icon="MATERIAL")
+
+        if baked:
+            rec = material_scan.record(material)
+            _wrapped(layout.box(), "Baked into %s: %s" % (rec.get("folder", ""), rec.get("summary", "")),
+                     icon="CHECKMARK")
+        _wrapped(layout, nodes.osl_status()[1], icon="INFO")
+
+
+classes = (NDFBakeSettings, NDFBAKE_PT_material)

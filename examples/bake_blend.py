@@ -1,0 +1,108 @@
+"""Bake the normal-mapped materials of a .blend from the command line, with the add-on's own code
+(bake.py, the same code the Bake button runs).
+
+    blender -b scene.blend --python examples/bake_blend.py -- [--material NAME ...]
+            [--max-lobes N] [--tolerance T] [--pack] [--revert] [--no-save]
+
+Without --material it bakes every material the scene needs: those with a tangent-space normal
+map (Image Texture -> Normal Map -> Principled BSDF) on objects the scene renders. Each material's
+lobe textures go to //<material>.ndfbake/ beside the .blend. One line per material is printed,
+then a summary; the .blend is saved afterwards (its node groups refer to the textures by relative
+path) unless --no-save. --revert undoes earlier bakes instead (nodes restored, files deleted).
+
+Exit status: 0 when every material succeeded; 1 when any failed (a failed material and its files
+are left exactly as they were; the others are still baked and saved); 2 for bad usage (unknown
+option, a material that does not exist, an unsaved .blend).
+
+The add-on is the enabled or installed `ndfbake` if there is one, else this repository's addon/
+folder; the native library is the one inside the add-on folder, or $NDFBAKE_LIBRARY, or
+build/native/libndfbake.so of this checkout (see addon/ndfbake/native.py).
+"""
+import argparse
+import os
+import sys
+import time
+
+import bpy
+
+
+def _import_addon():
+    try:
+        import ndfbake  # an installed add-on (enabled or not) on Blender's module path
+        return ndfbake
+    except ImportError:
+        pass
+    import addon_utils
+    for module in addon_utils.modules(refresh=False):
+        if module.__name__ == "ndfbake":
+            return module
+    here = os.path.dirname(os.path.abspath(__file__))
+    sys.path.insert(0, os.path.join(here, "..", "addon"))
+    import ndfbake
+    return ndfbake
+
+
+def _arguments():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    parser = argparse.ArgumentParser(prog="blender -b FILE.blend --python examples/bake_blend.py --",
+                                     description="Bake (or revert) ndfbake lobes for the materials of a .blend.")
+    parser.add_argument("--material", action="append", default=[], metavar="NAME",
+                        help="a material to bake (repeat for several); default: every material the scene needs")
+    parser.add_argument("--max-lobes", type=int, default=4, help="vMF lobes per texel at most (1..8, default 4)")
+    parser.add_argument("--tolerance", type=float, default=0.0,
+                        help="relative error a texel may keep: fewer lobes where it suffices (default 0)")
+    parser.add_argument("--pack", action="store_true", help="also pack the lobe textures into the .blend")
+    parser.add_argument("--revert", action="store_true", help="undo earlier bakes instead of baking")
+    parser.add_argument("--no-save", action="store_true", help="do not save the .blend afterwards")
+    return parser.parse_args(argv)  # exits with status 2 on bad usage
+
+
+def main():
+    args = _arguments()
+    addon = _import_addon()
+    bake = addon.bake
+    if not bpy.data.filepath:
+        print("bake_blend: open a saved .blend: blender -b FILE.blend --python examples/bake_blend.py", file=sys.stderr)
+        return 2
+    if args.material:
+        missing = [name for name in args.material if name not in bpy.data.materials]
+        if missing:
+            print("bake_blend: no material named %s in %s" % (", ".join(repr(m) for m in missing), bpy.data.filepath),
+                  file=sys.stderr)
+            return 2
+        materials = [bpy.data.materials[name] for name in args.material]
+    elif args.revert:
+        materials = [m for m in bpy.data.materials if bake.is_baked(m)]
+    else:
+        materials = bake.materials_needing_bake(bpy.context.scene)
+    if not materials:
+        print("bake_blend: nothing to %s in %s" % ("revert" if args.revert else "bake", bpy.data.filepath))
+        return 0
+
+    settings = bake.BakeSettings(max_lobes=args.max_lobes, tolerance=args.tolerance, pack=args.pack)
+    start = time.perf_counter()
+    failures = 0
+    changed = 0
+    for material in materials:
+        try:
+            if args.revert:
+                removed, left = bake.revert(material)
+                print("reverted %s: %d files deleted%s" % (material.name, removed,
+                                                          "; could not delete " + ", ".join(left) if left else ""))
+            else:
+                result = bake.bake_material(material, settings)
+                print("baked %s into %s: %s" % (material.name, result.folder, result.summary))
+            changed += 1
+        except bake.BakeError as e:
+            failures += 1
+            print("FAILED %s [%s]: %s" % (material.name, e.code, e.message))
+    if changed and not args.no_save:
+        bpy.ops.wm.save_mainfile()
+    print("%s %d of %d materials in %.1f s%s" % ("reverted" if args.revert else "baked", changed, len(materials),
+                                               time.perf_counter() - start,
+                                               ", saved " + bpy.data.filepath if changed and not args.no_save else ""))
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

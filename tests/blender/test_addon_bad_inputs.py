@@ -1,0 +1,203 @@
+"""Bad input: each case gives its own report, from bake.py (BakeError code + message) and from the
+operator (the ERROR report, a RuntimeError in scripts), and nothing in the file or on disk changes.
+
+Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_bad_inputs.py -- LIB
+
+Cases: a material without a normal map; an image missing on disk; a packed image; a generated
+image; an 8-bit normal map whose Image datablock is sRGB (refused: see material_scan.py for why);
+an object-space Normal Map node; a read-only output folder (the .blend's folder made read-only;
+as root, permission bits do not bind, so the bake runs under an unprivileged effective uid); a file
+where the lobe folder should go; an unsaved .blend; a corrupt image file; a Normal Map fed by
+something other than an Image Texture; two different normal-map images in one material.
+"""
+import contextlib
+import os
+import sys
+
+import bpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import test_addon_helpers as h  # noqa: E402
+
+NOBODY = 65534
+
+
+@contextlib.contextmanager
+def unprivileged():
+    """Runs the block with an unprivileged effective uid when the tests run as root."""
+    if os.geteuid() != 0:
+        yield
+        return
+    os.setegid(NOBODY)
+    os.seteuid(NOBODY)
+    try:
+        yield
+    finally:
+        os.seteuid(0)
+        os.setegid(0)
+
+
+def expect_refused(material, code, fragments, directory, *, wrap=None):
+    """The bake fails with `code`, its message holds every fragment, in bake.py and through the
+    operator, and neither the material, the data-blocks nor the folder change."""
+    from ndfbake import bake
+    before, data_before, files_before = h.dump_material(material), h.data_counts(), h.listing(directory)
+    wrap = wrap or contextlib.nullcontext
+    try:
+        with wrap():
+            bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        raise AssertionError("%s: the bake succeeded" % code)
+    except bake.BakeError as e:
+        h.expect(e.code == code, "expected %s, got %s: %s" % (code, e.code, e.message))
+        for fragment in fragments:
+            h.expect(fragment in e.message, "%s: %r not in %r" % (code, fragment, e.message))
+        print("  %s: %s" % (code, e.message))
+    try:
+        with wrap():
+            bpy.ops.ndfbake.bake(material=material.name)
+        raise AssertionError("%s: the operator succeeded" % code)
+    except RuntimeError as e:
+        h.expect(all(f in str(e) for f in fragments), "%s: operator said %r" % (code, str(e)))
+    h.expect(h.dump_material(material) == before, "%s: the material changed" % code)
+    h.expect(h.data_counts() == data_before, "%s: data-blocks changed" % code)
+    h.expect(h.listing(directory) == files_before, "%s: files changed: %s" % (code, h.listing(directory)))
+
+
+def _case(setup):
+    directory = h.temp_dir()
+    try:
+        setup(directory)
+    finally:
+        h.cleanup(directory)
+
+
+def test_material_without_normal_map():
+    def run(directory):
+        h.reset_scene()
+        material = bpy.data.materials.new("Plain")
+        material.use_nodes = True
+        h.plane_with(material)
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "scene.blend"))
+        expect_refused(material, "NO_NORMAL_MAP", ["'Plain'", "Normal Map node"], directory)
+    _case(run)
+
+
+def test_missing_image_file():
+    def run(directory):
+        material = h.baked_scene(directory)
+        os.remove(os.path.join(directory, "normal.png"))
+        expect_refused(material, "MISSING_FILE", ["normal.png", "missing"], directory)
+    _case(run)
+
+
+def test_packed_image():
+    def run(directory):
+        material = h.baked_scene(directory)
+        bpy.data.images["normal.png"].pack()
+        expect_refused(material, "PACKED_IMAGE", ["'normal.png'", "packed", "Unpack"], directory)
+    _case(run)
+
+
+def test_generated_image():
+    def run(directory):
+        material = h.baked_scene(directory)
+        generated = bpy.data.images.new("Painted", 32, 32)
+        generated.colorspace_settings.name = "Non-Color"
+        material.node_tree.nodes["Normal Texture"].image = generated
+        expect_refused(material, "GENERATED_IMAGE", ["'Painted'", "generated", "Save As"], directory)
+    _case(run)
+
+
+def test_srgb_tagged_normal_map():
+    def run(directory):
+        material = h.baked_scene(directory, colorspace="sRGB")
+        expect_refused(material, "COLOR_SPACE", ["'normal.png'", "'sRGB'", "Non-Color"], directory)
+    _case(run)
+
+
+def test_object_space_normal_map():
+    def run(directory):
+        material = h.baked_scene(directory)
+        material.node_tree.nodes["Normal Map"].space = "OBJECT"
+        expect_refused(material, "NOT_TANGENT_SPACE", ["'Normal Map'", "set to Object Space", "tangent-space"], directory)
+    _case(run)
+
+
+def test_read_only_output_folder():
+    def run(directory):
+        material = h.baked_scene(directory)
+        os.chmod(directory, 0o555)
+        try:
+            expect_refused(material, "OUTPUT_NOT_WRITABLE", ["cannot write the lobe folder",
+                                                            os.path.join(directory, "Bumpy.ndfbake"),
+                                                            "Permission denied"], directory, wrap=unprivileged)
+        finally:
+            os.chmod(directory, 0o755)
+    _case(run)
+
+
+def test_file_in_place_of_the_output_folder():
+    def run(directory):
+        material = h.baked_scene(directory)
+        with open(os.path.join(directory, "Bumpy.ndfbake"), "w") as f:
+            f.write("not a folder")
+        expect_refused(material, "OUTPUT_NOT_WRITABLE", ["Bumpy.ndfbake", "in the way"], directory)
+    _case(run)
+
+
+def test_unsaved_blend():
+    def run(directory):
+        h.reset_scene()
+        png = h.write_normal_map(os.path.join(directory, "normal.png"))
+        material = h.normal_mapped_material("Unsaved", png)
+        h.plane_with(material)
+        expect_refused(material, "UNSAVED_BLEND", ["save the .blend first", "'Unsaved'"], directory)
+    _case(run)
+
+
+def test_corrupt_image_file():
+    def run(directory):
+        material = h.baked_scene(directory)
+        with open(os.path.join(directory, "normal.png"), "wb") as f:
+            f.write(b"\x89PNG\r\n\x1a\n" + b"\x5a" * 100)
+        expect_refused(material, "BAD_IMAGE", ["normal.png", "cannot be read"], directory)
+    _case(run)
+
+
+def test_normal_map_not_from_an_image_texture():
+    def run(directory):
+        material = h.baked_scene(directory)
+        tree = material.node_tree
+        rgb = tree.nodes.new("ShaderNodeRGB")
+        tree.links.new(rgb.outputs[0], tree.nodes["Normal Map"].inputs["Color"])
+        expect_refused(material, "NO_IMAGE_TEXTURE", ["'Normal Map'", "Image Texture"], directory)
+    _case(run)
+
+
+def test_two_normal_map_images():
+    def run(directory):
+        material = h.baked_scene(directory)
+        other = h.write_normal_map(os.path.join(directory, "other.png"), "fbm", 32)
+        tree = material.node_tree
+        second = tree.nodes.new("ShaderNodeBsdfPrincipled")
+        mix = tree.nodes.new("ShaderNodeMixShader")
+        tree.links.new(tree.nodes["Principled BSDF"].outputs[0], mix.inputs[1])
+        tree.links.new(second.outputs[0], mix.inputs[2])
+        tree.links.new(mix.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+        tex = tree.nodes.new("ShaderNodeTexImage")
+        tex.image = bpy.data.images.load(other)
+        tex.image.colorspace_settings.name = "Non-Color"
+        nm = tree.nodes.new("ShaderNodeNormalMap")
+        tree.links.new(tex.outputs["Color"], nm.inputs["Color"])
+        tree.links.new(nm.outputs["Normal"], second.inputs["Normal"])
+        bpy.ops.wm.save_mainfile()
+        expect_refused(material, "SEVERAL_IMAGES", ["2 normal-map images", "normal.png", "other.png"], directory)
+    _case(run)
+
+
+if __name__ == "__main__":
+    h.import_addon()
+    h.run([test_material_without_normal_map, test_missing_image_file, test_packed_image, test_generated_image,
+           test_srgb_tagged_normal_map, test_object_space_normal_map, test_read_only_output_folder,
+           test_file_in_place_of_the_output_folder, test_unsaved_blend, test_corrupt_image_file,
+           test_normal_map_not_from_an_image_texture, test_two_normal_map_images])

@@ -1,0 +1,266 @@
+"""Scripted bakes of a normal-mapped material, and Revert, inside `blender -b`.
+
+Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_bake.py -- LIB
+
+The scene: a plane whose material reads a 64² PNG normal map written by the library
+(ndfb_synthesize + ndfb_normal_map_save) through Image Texture -> Normal Map -> Principled BSDF,
+saved as a .blend in a temporary folder.
+- A bake adds exactly one node (the group) and rewires only the Principled BSDF's output; the
+  lobe textures land in //<material>.ndfbake/ with relative paths.
+- Revert restores every node, link, socket value and property exactly (full dump compared), the
+  data-blocks as they were, and deletes the files and the folder.
+- The operators work in the background; re-baking with fewer lobes emits a one-lobe group and
+  drops the surplus textures; bake + save + reopen keeps working and reverts; bake_all bakes only
+  what the scene renders; linked Principled inputs are carried over; packing works.
+"""
+import os
+import sys
+
+import bpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import test_addon_helpers as h  # noqa: E402
+
+
+def _group_nodes(material):
+    return [n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeGroup" and n.get("ndfbake")]
+
+
+def _principled_count(tree):
+    return sum(1 for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+
+
+def test_bake_adds_only_the_group_and_bypass():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        before, data_before, files_before = h.dump_material(material), h.data_counts(), h.listing(directory)
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=4))
+        print("bake:", result.summary)
+        after = h.dump_material(material)
+
+        added = set(after["nodes"]) - set(before["nodes"])
+        h.expect(added == {"ndfbake"}, "added nodes: %s" % added)
+        h.expect(set(before["nodes"]) <= set(after["nodes"]), "a node went away")
+        for name, node in before["nodes"].items():
+            if name == "Principled BSDF":
+                continue  # its output is bypassed (links, below); nothing of the node itself changes
+            h.expect(after["nodes"][name] == node, "node %s changed" % name)
+        h.expect(after["nodes"]["Principled BSDF"] == before["nodes"]["Principled BSDF"],
+                 "the Principled BSDF node itself changed")
+        removed_links = set(before["links"]) - set(after["links"])
+        added_links = set(after["links"]) - set(before["links"])
+        h.expect(removed_links == {("Principled BSDF", "BSDF", "Material Output", "Surface", False, True)},
+                 "removed links: %s" % removed_links)
+        h.expect(all("ndfbake" in (l[0], l[2]) for l in added_links), "added links not at the group: %s" % added_links)
+        h.expect(any(l[0] == "ndfbake" and l[2] == "Material Output" for l in added_links), "group not at the output")
+
+        folder = os.path.join(directory, "Bumpy.ndfbake")
+        files = sorted(os.listdir(folder))
+        h.expect("report.json" in files and "level00_lobe0.exr" in files, "files: %s" % files)
+        h.expect(not any(f.startswith(".") for f in files), "staging left behind: %s" % files)
+        h.expect(result.lobes == len([f for f in files if f.startswith("level00_lobe")]), "lobe count")
+        group = _group_nodes(material)[0].node_tree
+        h.expect(_principled_count(group) == result.lobes, "one BSDF per lobe")
+        for j in range(result.lobes):
+            image = bpy.data.images["Bumpy lobe %d" % j]
+            h.expect(image.filepath == "//Bumpy.ndfbake/level00_lobe%d.exr" % j, "path %s" % image.filepath)
+            h.expect(image.colorspace_settings.name == "Non-Color", "colour space")
+            h.expect(image.alpha_mode == "CHANNEL_PACKED", "alpha mode")
+            h.expect(image.has_data or image.size[0] > 0, "image %d did not load" % j)
+
+        removed, left = bake.revert(material)
+        h.expect(not left and removed == len(files), "revert removed %d of %d files (%s)" % (removed, len(files), left))
+        restored = h.dump_material(material)
+        for name in set(before["nodes"]) | set(restored["nodes"]):
+            h.expect(before["nodes"].get(name) == restored["nodes"].get(name), "node %s differs after revert:\n%s\n%s"
+                     % (name, before["nodes"].get(name), restored["nodes"].get(name)))
+        h.expect(restored == before, "material differs after revert")
+        h.expect(h.data_counts() == data_before, "data-blocks differ after revert: %s vs %s"
+                 % (h.data_counts(), data_before))
+        h.expect(h.listing(directory) == files_before, "files after revert: %s" % h.listing(directory))
+    finally:
+        h.cleanup(directory)
+
+
+def test_operators_rebake_fewer_lobes_and_revert():
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        material.ndfbake_settings.max_lobes = 4  # the panel's settings are the user's, not the bake's
+        before, data_before = h.dump_material(material), h.data_counts()
+        bpy.context.view_layer.objects.active = bpy.data.objects["Plane"]
+        h.expect(bpy.ops.ndfbake.bake() == {"FINISHED"}, "bake operator")
+        h.expect(len(_group_nodes(material)) == 1, "one group node")
+        four = _principled_count(_group_nodes(material)[0].node_tree)
+        h.expect(four == 4, "4 lobes, got %d" % four)
+
+        material.ndfbake_settings.max_lobes = 1
+        h.expect(bpy.ops.ndfbake.bake(material="Bumpy") == {"FINISHED"}, "re-bake")
+        groups = _group_nodes(material)
+        h.expect(len(groups) == 1, "re-bake left %d group nodes" % len(groups))
+        tree = groups[0].node_tree
+        h.expect(_principled_count(tree) == 1, "one-lobe group expected")
+        h.expect(not any(n.bl_idname == "ShaderNodeMixShader" for n in tree.nodes), "a one-lobe group mixes nothing")
+        files = sorted(os.listdir(os.path.join(directory, "Bumpy.ndfbake")))
+        h.expect("level00_lobe1.exr" not in files, "surplus lobe files kept: %s" % files)
+        h.expect("Bumpy lobe 1" not in bpy.data.images, "surplus lobe image kept")
+        h.expect(len([g for g in bpy.data.node_groups if g.name.startswith("NDFB Bumpy")]) == 1,
+                 "old material groups kept: %s" % [g.name for g in bpy.data.node_groups])
+
+        h.expect(bpy.ops.ndfbake.revert(material="Bumpy") == {"FINISHED"}, "revert operator")
+        h.expect(h.dump_material(material) == before, "material differs after revert")
+        h.expect(h.data_counts() == data_before, "data-blocks differ after revert")
+        h.expect(not os.path.exists(os.path.join(directory, "Bumpy.ndfbake")), "folder left")
+        try:
+            bpy.ops.ndfbake.revert(material="Bumpy")
+            raise AssertionError("reverting an unbaked material must fail")
+        except RuntimeError as e:
+            h.expect("has no ndfbake bake" in str(e), str(e))
+    finally:
+        h.cleanup(directory)
+
+
+def test_save_reopen_then_revert():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        before = h.dump_material(material)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        bpy.ops.wm.save_mainfile()
+        bpy.ops.wm.open_mainfile(filepath=os.path.join(directory, "scene.blend"))
+        material = bpy.data.materials["Bumpy"]
+        h.expect(bake.is_baked(material), "bake record lost on save")
+        for j in range(2):
+            image = bpy.data.images["Bumpy lobe %d" % j]
+            h.expect(image.filepath.startswith("//"), "absolute path saved: %s" % image.filepath)
+            h.expect(image.size[0] == 64, "image %d does not load after reopening (size %s)" % (j, tuple(image.size)))
+        bake.revert(material)
+        h.expect(h.dump_material(material) == before, "material differs after revert in the reopened file")
+        h.expect(not any(i.name.startswith("Bumpy lobe") for i in bpy.data.images), "lobe images left")
+        h.expect(not os.path.exists(os.path.join(directory, "Bumpy.ndfbake")), "folder left")
+    finally:
+        h.cleanup(directory)
+
+
+def test_bake_all_bakes_what_the_scene_renders():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        h.reset_scene()
+        png = h.write_normal_map(os.path.join(directory, "normal.png"), "fbm", 32)
+        seen = h.normal_mapped_material("Seen", png)
+        hidden = h.normal_mapped_material("Hidden", png)
+        plain = bpy.data.materials.new("Plain")
+        plain.use_nodes = True
+        h.plane_with(seen, "A")
+        h.plane_with(plain, "B")
+        h.plane_with(hidden, "C").hide_render = True
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "scene.blend"))
+        needed = [m.name for m in bake.materials_needing_bake(bpy.context.scene)]
+        h.expect(needed == ["Seen"], "needed: %s" % needed)
+        plain_before, hidden_before = h.dump_material(plain), h.dump_material(hidden)
+        h.expect(bpy.ops.ndfbake.bake_all() == {"FINISHED"}, "bake_all")
+        h.expect(bake.is_baked(seen) and not bake.is_baked(hidden) and not bake.is_baked(plain), "baked set")
+        h.expect(h.dump_material(plain) == plain_before and h.dump_material(hidden) == hidden_before,
+                 "bake_all touched a material it should not")
+        h.expect(sorted(os.listdir(directory)) == ["Seen.ndfbake", "normal.png", "scene.blend"],
+                 "files: %s" % sorted(os.listdir(directory)))
+    finally:
+        h.cleanup(directory)
+
+
+def test_linked_inputs_are_carried_and_restored():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory, metallic=1.0)
+        tree = material.node_tree
+        principled = tree.nodes["Principled BSDF"]
+        rgb = tree.nodes.new("ShaderNodeRGB")
+        rgb.outputs[0].default_value = (0.9, 0.5, 0.2, 1.0)
+        value = tree.nodes.new("ShaderNodeValue")
+        value.outputs[0].default_value = 0.42
+        tree.links.new(rgb.outputs[0], principled.inputs["Base Color"])
+        tree.links.new(value.outputs[0], principled.inputs["Roughness"])
+        tree.nodes["Normal Map"].inputs["Strength"].default_value = 0.8
+        tree.nodes["Normal Map"].uv_map = "UVMap"
+        mapping = tree.nodes.new("ShaderNodeMapping")
+        coords = tree.nodes.new("ShaderNodeTexCoord")
+        tree.links.new(coords.outputs["UV"], mapping.inputs["Vector"])
+        tree.links.new(mapping.outputs["Vector"], tree.nodes["Normal Texture"].inputs["Vector"])
+        principled.inputs["Specular"].default_value = 0.7
+        bpy.ops.wm.save_mainfile()
+        before = h.dump_material(material)
+
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        group_node = _group_nodes(material)[0]
+        h.expect(group_node.inputs["Base Color"].links[0].from_node == rgb, "Base Color not carried")
+        h.expect(group_node.inputs["Roughness"].links[0].from_node == value, "Roughness not carried")
+        h.expect(group_node.inputs["Vector"].links[0].from_node == mapping, "texture coordinates not carried")
+        h.expect(abs(group_node.inputs["Normal Strength"].default_value - 0.8) < 1e-6, "strength")
+        h.expect(abs(group_node.inputs["Specular"].default_value - 0.7) < 1e-6, "Specular value")
+        h.expect(abs(group_node.inputs["Metallic"].default_value - 1.0) < 1e-6, "Metallic value")
+        inner = group_node.node_tree
+        h.expect(all(n.uv_map == "UVMap" for n in inner.nodes if n.bl_idname == "ShaderNodeNormalMap"), "uv map")
+        rec = material_record(material)
+        h.expect(abs(rec["settings"]["roughness"] - 0.5) < 1e-6, "linked roughness: the fit uses 0.5")
+        bake.revert(material)
+        h.expect(h.dump_material(material) == before, "material differs after revert")
+    finally:
+        h.cleanup(directory)
+
+
+def material_record(material):
+    from ndfbake import material_scan
+    return material_scan.record(material)
+
+
+def test_pack_option():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        data_before = h.data_counts()
+        bake.bake_material(material, bake.BakeSettings(max_lobes=1, pack=True))
+        image = bpy.data.images["Bumpy lobe 0"]
+        h.expect(image.packed_file is not None, "not packed")
+        bake.revert(material)
+        h.expect(h.data_counts() == data_before, "packed image left after revert")
+    finally:
+        h.cleanup(directory)
+
+
+def test_failure_while_building_nodes_rolls_back():
+    from ndfbake import bake, nodes
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        before, data_before, files_before = h.dump_material(material), h.data_counts(), h.listing(directory)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        original = nodes._wire_group_node
+
+        def broken(*args):
+            raise RuntimeError("simulated bug")
+        nodes._wire_group_node = broken
+        try:
+            bake.bake_material(material, bake.BakeSettings(max_lobes=3))
+            raise AssertionError("the simulated bug did not surface")
+        except bake.BakeError as e:
+            h.expect(e.code == "INTERNAL" and "simulated bug" in e.message, e.message)
+        finally:
+            nodes._wire_group_node = original
+        h.expect(h.dump_material(material) == before, "a half-built material was left")
+        h.expect(h.data_counts() == data_before, "data-blocks left: %s" % h.data_counts())
+        h.expect(h.listing(directory) == files_before, "files left: %s" % h.listing(directory))
+    finally:
+        h.cleanup(directory)
+
+
+if __name__ == "__main__":
+    h.import_addon()
+    h.run([test_bake_adds_only_the_group_and_bypass, test_failure_while_building_nodes_rolls_back, test_operators_rebake_fewer_lobes_and_revert,
+           test_save_reopen_then_revert, test_bake_all_bakes_what_the_scene_renders,
+           test_linked_inputs_are_carried_and_restored, test_pack_option])

@@ -1,0 +1,121 @@
+"""Cancelling a bake part way leaves no files and no changed material.
+
+Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_cancel.py -- LIB
+
+- Cancelled from the progress callback during the fit, and during the write (after some lobe
+  textures exist in the library's staging folder): no file, no folder, material unchanged.
+- The Bake button's path: the native bake on a worker thread (BakeJob.start), cancelled from the
+  main thread while it fits (what Esc does in the modal operator): the same.
+- A cancelled re-bake keeps the previous bake's files byte for byte and its nodes.
+"""
+import hashlib
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import test_addon_helpers as h  # noqa: E402
+
+
+def _snapshot(directory):
+    digest = {}
+    for name in h.listing(directory):
+        path = os.path.join(directory, name)
+        if os.path.isfile(path):
+            with open(path, "rb") as f:
+                digest[name] = hashlib.sha256(f.read()).hexdigest()
+        else:
+            digest[name] = "dir"
+    return digest
+
+
+def _expect_unchanged(material, directory, before, files_before, what):
+    h.expect(h.dump_material(material) == before, "%s: the material changed" % what)
+    h.expect(_snapshot(directory) == files_before, "%s: files changed: %s" % (what, h.listing(directory)))
+
+
+def _cancel_at(stage_wanted):
+    seen = []
+
+    def progress(stage, fraction):
+        seen.append(stage)
+        # fraction > 0: part way through the stage (for "write", level 0's textures are staged)
+        return stage == stage_wanted and fraction > 0.0
+    return progress, seen
+
+
+def test_cancel_during_fit_and_during_write():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory, size=128)
+        before, files_before = h.dump_material(material), _snapshot(directory)
+        for stage in ("fit", "write"):
+            progress, seen = _cancel_at(stage)
+            try:
+                bake.bake_material(material, bake.BakeSettings(max_lobes=4), progress=progress)
+                raise AssertionError("not cancelled at %s (stages seen: %s)" % (stage, sorted(set(seen))))
+            except bake.BakeError as e:
+                h.expect(e.code == "CANCELLED", "%s: %s %s" % (stage, e.code, e.message))
+                h.expect("cancelled" in e.message and "'Bumpy'" in e.message, e.message)
+            h.expect(seen[-1] == stage, "cancelled at %s, last stage %s" % (stage, seen[-1]))
+            _expect_unchanged(material, directory, before, files_before, "cancel during " + stage)
+            print("  cancelled during %s: nothing written, material unchanged" % stage)
+    finally:
+        h.cleanup(directory)
+
+
+def test_cancel_worker_thread_from_main_thread():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory, pattern="fbm", size=256)
+        before, files_before = h.dump_material(material), _snapshot(directory)
+        job = bake.prepare(material, bake.BakeSettings(max_lobes=4, threads=1))
+        job.start()
+        deadline = time.time() + 30
+        while job.stage != "fit" and not job.done and time.time() < deadline:
+            time.sleep(0.005)  # the main thread keeps running: Blender's UI would stay live
+        h.expect(job.stage == "fit" and not job.done, "the worker did not reach the fit (stage %r, done %s)"
+                 % (job.stage, job.done))
+        fraction = job.fraction
+        job.cancel()
+        job.join(30)
+        h.expect(job.done, "the worker did not stop")
+        h.expect(job.error is not None and job.error.code == "CANCELLED", "error: %r" % job.error)
+        try:
+            bake.finish(job)
+            raise AssertionError("finish() after a cancelled job must fail")
+        except bake.BakeError as e:
+            h.expect(e.code == "CANCELLED", e.code)
+        _expect_unchanged(material, directory, before, files_before, "worker cancel")
+        print("  worker cancelled at %.0f%% of the bake" % (100 * fraction))
+    finally:
+        h.cleanup(directory)
+
+
+def test_cancelled_rebake_keeps_the_previous_bake():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory, size=128)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        baked, files_baked = h.dump_material(material), _snapshot(directory)
+        data_baked = h.data_counts()
+        for stage in ("fit", "write"):
+            progress, _ = _cancel_at(stage)
+            try:
+                bake.bake_material(material, bake.BakeSettings(max_lobes=3), progress=progress)
+                raise AssertionError("re-bake not cancelled")
+            except bake.BakeError as e:
+                h.expect(e.code == "CANCELLED", e.code)
+            _expect_unchanged(material, directory, baked, files_baked, "cancelled re-bake at " + stage)
+            h.expect(h.data_counts() == data_baked, "data-blocks changed")
+    finally:
+        h.cleanup(directory)
+
+
+if __name__ == "__main__":
+    h.import_addon()
+    h.run([test_cancel_during_fit_and_during_write, test_cancel_worker_thread_from_main_thread,
+           test_cancelled_rebake_keeps_the_previous_bake])

@@ -1,0 +1,89 @@
+"""examples/bake_blend.py: a scripted bake of a .blend from the command line.
+
+Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_cli.py -- LIB
+
+A .blend with two rendered materials, "Good" (a PNG normal map) and "Bad" (its normal map's Color
+Space is sRGB), and an unrendered "Hidden" one. The script runs in a separate `blender -b`:
+- baking everything the scene needs exits 1, prints the baked material's report and the other's
+  specific failure, saves the file: Good is baked, Bad and Hidden are exactly as they were;
+- naming Good alone exits 0; --revert restores Good exactly and deletes its folder;
+- an unknown material exits 2, changing nothing.
+"""
+import os
+import subprocess
+import sys
+
+import bpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import test_addon_helpers as h  # noqa: E402
+
+SCRIPT = os.path.join(h.REPO, "examples", "bake_blend.py")
+
+
+def run_script(blend, *args):
+    library, _ = h.arguments()
+    env = dict(os.environ, NDFBAKE_LIBRARY=library)
+    proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", blend,
+                           "--python-expr", "import sys; sys.dont_write_bytecode = True",  # keep addon/ clean
+                           "--python", SCRIPT, "--"] + list(args),
+                          env=env, capture_output=True, text=True, timeout=120)
+    lines = [l for l in proc.stdout.splitlines() if l.startswith(("baked", "FAILED", "reverted", "bake_blend"))]
+    lines += [l for l in proc.stderr.splitlines() if l.startswith("bake_blend")]
+    print("  bake_blend.py %s -> exit %d\n    %s" % (" ".join(args), proc.returncode, "\n    ".join(lines)))
+    return proc.returncode, proc.stdout + proc.stderr
+
+
+def reopen(blend):
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    return {name: h.dump_material(bpy.data.materials[name]) for name in ("Good", "Bad", "Hidden")}
+
+
+def test_command_line_bake_and_revert():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        h.reset_scene()
+        png = h.write_normal_map(os.path.join(directory, "normal.png"), "weave", 64)
+        good = h.normal_mapped_material("Good", png)
+        h.plane_with(good, "A")
+        bad_png = h.write_normal_map(os.path.join(directory, "srgb.png"), "bumps", 32)
+        h.plane_with(h.normal_mapped_material("Bad", bad_png, colorspace="sRGB"), "B")
+        h.plane_with(h.normal_mapped_material("Hidden", png), "C").hide_render = True
+        blend = os.path.join(directory, "scene.blend")
+        bpy.ops.wm.save_as_mainfile(filepath=blend)
+        original = reopen(blend)
+
+        code, out = run_script(blend, "--max-lobes", "2")
+        h.expect(code == 1, "one failure must exit 1, got %d:\n%s" % (code, out))
+        h.expect("baked Good into //Good.ndfbake: 2 lobes" in out, out)
+        h.expect("FAILED Bad [COLOR_SPACE]: image 'srgb.png' has Color Space 'sRGB'" in out, out)
+        h.expect("baked 1 of 2 materials" in out, out)
+        after = reopen(blend)
+        h.expect(bake.is_baked(bpy.data.materials["Good"]), "Good not baked in the saved file")
+        h.expect(after["Bad"] == original["Bad"] and after["Hidden"] == original["Hidden"],
+                 "a material that was not baked changed")
+        h.expect(sorted(os.listdir(directory)) == ["Good.ndfbake", "normal.png", "scene.blend", "scene.blend1",
+                                                   "srgb.png"], sorted(os.listdir(directory)))
+
+        code, out = run_script(blend, "--material", "Good", "--max-lobes", "1")
+        h.expect(code == 0, "re-bake of Good: exit %d\n%s" % (code, out))
+        h.expect("baked Good into //Good.ndfbake: 1 lobe," in out, out)
+
+        code, out = run_script(blend, "--revert")
+        h.expect(code == 0, "revert: exit %d\n%s" % (code, out))
+        h.expect("reverted Good" in out, out)
+        h.expect(reopen(blend) == original, "the reverted file differs from the original")
+        h.expect(not os.path.exists(os.path.join(directory, "Good.ndfbake")), "lobe folder left")
+
+        mtime = os.path.getmtime(blend)
+        code, out = run_script(blend, "--material", "Nope")
+        h.expect(code == 2 and "no material named 'Nope'" in out, "unknown material: exit %d\n%s" % (code, out))
+        h.expect(os.path.getmtime(blend) == mtime, "the .blend was saved after a usage error")
+    finally:
+        h.cleanup(directory)
+
+
+if __name__ == "__main__":
+    h.import_addon()
+    h.run([test_command_line_bake_and_revert])

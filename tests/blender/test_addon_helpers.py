@@ -1,0 +1,202 @@
+"""Shared set-up for the add-on tests (tests/blender/test_addon_*.py), run inside `blender -b`:
+
+    blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_X.py -- LIB [ZIP]
+
+LIB is the built libndfbake.so (NDFBAKE_LIBRARY is set to it), ZIP the add-on zip the build made.
+The add-on is imported from the source tree (addon/) and registered; test_addon_install.py checks
+the zip path instead. Not a test itself (ctest runs the files it lists).
+"""
+import os
+import shutil
+import sys
+import tempfile
+import time
+import traceback
+
+import bpy
+
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree (addon/, tests/blender/)
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.normpath(os.path.join(HERE, "..", ".."))
+ADDON_PARENT = os.path.join(REPO, "addon")
+
+
+def arguments():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    library = os.path.abspath(argv[0]) if argv else os.path.join(REPO, "build", "native", "libndfbake.so")
+    zip_path = os.path.abspath(argv[1]) if len(argv) > 1 else ""
+    return library, zip_path
+
+
+def import_addon(register=True):
+    """Imports addon/ndfbake from the source tree against LIB; registers it once."""
+    library, _ = arguments()
+    os.environ["NDFBAKE_LIBRARY"] = library
+    if ADDON_PARENT not in sys.path:
+        sys.path.insert(0, ADDON_PARENT)
+    import ndfbake
+    if register and not hasattr(bpy.types.Material, "ndfbake_settings"):
+        ndfbake.register()
+    return ndfbake
+
+
+def temp_dir(prefix="ndfb-addon-"):
+    path = tempfile.mkdtemp(prefix=prefix)
+    os.chmod(path, 0o755)  # readable by the unprivileged uid the read-only test switches to
+    return path
+
+
+def write_normal_map(path, pattern="bumps", size=64, seed=3):
+    """A synthetic tangent-space normal map saved by the library (8-bit PNG for .png)."""
+    from ndfbake import native
+    with native.load().context() as ctx:
+        with ctx.synthesize(pattern, size, size, seed) as normal_map:
+            normal_map.save(path)
+    return path
+
+
+def reset_scene():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    if not hasattr(bpy.types.Material, "ndfbake_settings"):
+        import ndfbake
+        ndfbake.register()
+
+
+def normal_mapped_material(name, image_path, roughness=0.35, metallic=0.0, colorspace="Non-Color"):
+    """Image Texture -> Normal Map (tangent) -> Principled BSDF -> Material Output."""
+    material = bpy.data.materials.new(name)
+    material.use_nodes = True
+    tree = material.node_tree
+    principled = tree.nodes["Principled BSDF"]
+    principled.inputs["Roughness"].default_value = roughness
+    principled.inputs["Metallic"].default_value = metallic
+    principled.inputs["Base Color"].default_value = (0.6, 0.4, 0.3, 1.0)
+    texture = tree.nodes.new("ShaderNodeTexImage")
+    texture.name = "Normal Texture"
+    texture.location = (-700, -300)
+    if image_path is not None:
+        image = bpy.data.images.load(image_path, check_existing=True)
+        image.colorspace_settings.name = colorspace
+        texture.image = image
+    normal_map = tree.nodes.new("ShaderNodeNormalMap")
+    normal_map.name = "Normal Map"
+    normal_map.location = (-400, -300)
+    tree.links.new(texture.outputs["Color"], normal_map.inputs["Color"])
+    tree.links.new(normal_map.outputs["Normal"], principled.inputs["Normal"])
+    return material
+
+
+def plane_with(material, name="Plane", size=2.0):
+    bpy.ops.mesh.primitive_plane_add(size=size)
+    obj = bpy.context.active_object
+    obj.name = name
+    obj.data.materials.append(material)
+    return obj
+
+
+def baked_scene(directory, pattern="bumps", size=64, material_name="Bumpy", **material_args):
+    """A saved .blend in `directory` with a plane whose material uses a PNG normal map on disk."""
+    reset_scene()
+    image_path = write_normal_map(os.path.join(directory, "normal.png"), pattern, size)
+    material = normal_mapped_material(material_name, image_path, **material_args)
+    plane_with(material)
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "scene.blend"))
+    return bpy.data.materials[material_name]
+
+
+def _value(value):
+    if hasattr(value, "__len__") and not isinstance(value, str):
+        return tuple(round(float(v), 6) if isinstance(v, float) else v for v in value)
+    if isinstance(value, float):
+        return round(value, 6)
+    if hasattr(value, "name"):
+        return ("ID", value.name)
+    return value
+
+
+_SKIP_PROPERTIES = {"rna_type", "inputs", "outputs", "internal_links", "dimensions", "type", "bl_idname",
+                    "bl_label", "bl_description", "bl_icon", "bl_static_type", "bl_width_default",
+                    "bl_width_min", "bl_width_max", "bl_height_default", "bl_height_min", "bl_height_max",
+                    "texture_mapping", "color_mapping", "image_user", "interface"}
+
+
+def dump_tree(tree):
+    """Every node (its RNA properties, sockets and values), link and custom property of a node tree."""
+    nodes = {}
+    for node in tree.nodes:
+        props = {}
+        for prop in node.bl_rna.properties:
+            key = prop.identifier
+            if key in _SKIP_PROPERTIES:
+                continue
+            try:
+                props[key] = _value(getattr(node, key))
+            except AttributeError:
+                continue
+        props["custom"] = sorted(node.keys())
+        sockets = []
+        for kind, collection in (("in", node.inputs), ("out", node.outputs)):
+            for s in collection:
+                sockets.append((kind, s.identifier, s.name, s.enabled, s.hide, s.hide_value,
+                                _value(s.default_value) if hasattr(s, "default_value") else None))
+        props["sockets"] = sockets
+        nodes[node.name] = (node.bl_idname, props)
+    links = sorted((l.from_node.name, l.from_socket.identifier, l.to_node.name, l.to_socket.identifier,
+                    l.is_muted, l.is_valid) for l in tree.links)
+    return {"nodes": nodes, "links": links}
+
+
+def dump_material(material):
+    """dump_tree of its nodes, plus the material's own settings and custom properties."""
+    data = dump_tree(material.node_tree)
+    data["active_node"] = material.node_tree.nodes.active.name if material.node_tree.nodes.active else None
+    data["custom"] = sorted(material.keys())
+    settings = {}
+    for prop in material.bl_rna.properties:
+        if prop.type in {"BOOLEAN", "INT", "FLOAT", "STRING", "ENUM"} and prop.identifier != "rna_type":
+            settings[prop.identifier] = _value(getattr(material, prop.identifier))
+    data["settings"] = settings
+    return data
+
+
+def data_counts():
+    return {"images": sorted(i.name for i in bpy.data.images),
+            "node_groups": sorted(g.name for g in bpy.data.node_groups),
+            "materials": sorted(m.name for m in bpy.data.materials)}
+
+
+def listing(directory):
+    result = []
+    for root, dirs, files in os.walk(directory):
+        for name in dirs + files:
+            result.append(os.path.relpath(os.path.join(root, name), directory))
+    return sorted(result)
+
+
+def expect(condition, message):
+    if not condition:
+        raise AssertionError(message)
+
+
+def run(tests):
+    """Runs test functions, printing each one's result and time; exits non-zero on any failure."""
+    failures = 0
+    total = time.perf_counter()
+    for test in tests:
+        start = time.perf_counter()
+        try:
+            test()
+            print("PASS %s (%.1f s)" % (test.__name__, time.perf_counter() - start), flush=True)
+        except Exception:
+            failures += 1
+            traceback.print_exc()
+            print("FAIL %s (%.1f s)" % (test.__name__, time.perf_counter() - start), flush=True)
+    print("%d of %d passed in %.1f s" % (len(tests) - failures, len(tests), time.perf_counter() - total), flush=True)
+    if failures:
+        sys.stdout.flush()
+        os._exit(1)  # Blender's --python-exit-code only sees uncaught exceptions; be explicit
+
+
+def cleanup(directory):
+    shutil.rmtree(directory, ignore_errors=True)

@@ -1,0 +1,195 @@
+"""The add-on as users get it: ndfbake-<version>.zip installed through Preferences, the library
+inside it, and one clear message (never a traceback) when the library is missing or unusable.
+
+Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_install.py -- LIB ZIP
+
+- The zip holds the add-on's modules and libndfbake.so, and nothing else.
+- bpy.ops.preferences.addon_install + addon_utils.enable (into a temporary script directory)
+  registers it; the library is loaded from the installed folder (no NDFBAKE_LIBRARY); a bake and
+  a revert work through the operators; bl_info's version is the library's; the OSL check says
+  what this build has.
+- In separate Blender processes the installed add-on gets no library, a file that is not a
+  library, and a library of another ABI (compiled here when a C compiler is available): the
+  add-on still enables, the panel draws the one message, the operator reports it; no traceback.
+"""
+import os
+import shutil
+import subprocess
+import sys
+import zipfile
+
+import bpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import test_addon_helpers as h  # noqa: E402
+
+EXPECTED_FILES = {"__init__.py", "native.py", "material_scan.py", "nodes.py", "bake.py", "operators.py", "ui.py",
+                  "libndfbake.so"}
+
+
+def _zip():
+    _, zip_path = h.arguments()
+    h.expect(zip_path and os.path.isfile(zip_path), "the add-on zip is missing: %r (build first)" % zip_path)
+    return zip_path
+
+
+def _install(zip_path, scripts):
+    """Installs and enables the zip into `scripts`/addons as Preferences > Add-ons > Install does."""
+    import addon_utils
+    os.makedirs(os.path.join(scripts, "addons"), exist_ok=True)
+    bpy.context.preferences.filepaths.script_directory = scripts
+    bpy.utils.refresh_script_paths()
+    result = bpy.ops.preferences.addon_install(filepath=zip_path, target="PREFS", overwrite=True)
+    h.expect(result == {"FINISHED"}, "addon_install: %s" % result)
+    module = addon_utils.enable("ndfbake", default_set=True, handle_error=None)
+    h.expect(module is not None, "the add-on did not enable")
+    return module
+
+
+def test_zip_holds_the_addon_and_the_library():
+    with zipfile.ZipFile(_zip()) as z:
+        names = {n for n in z.namelist() if not n.endswith("/")}
+    h.expect({n.split("/", 1)[1] for n in names} == EXPECTED_FILES and all(n.startswith("ndfbake/") for n in names),
+             "zip contents: %s" % sorted(names))
+
+
+def test_installed_zip_loads_its_own_library_and_bakes():
+    os.environ.pop("NDFBAKE_LIBRARY", None)
+    scripts = h.temp_dir("ndfb-scripts-")
+    directory = h.temp_dir()
+    try:
+        module = _install(_zip(), scripts)
+        installed = os.path.join(scripts, "addons", "ndfbake")
+        h.expect(os.path.dirname(os.path.abspath(module.__file__)) == installed, "module from %s" % module.__file__)
+        lib = module.native.load()
+        h.expect(lib.path == os.path.join(installed, "libndfbake.so"), "library from %s" % lib.path)
+        version = tuple(int(x) for x in lib.version.split("."))
+        h.expect(module.bl_info["version"] == version, "bl_info %s vs library %s" % (module.bl_info["version"],
+                                                                                   lib.version))
+        available, message = module.nodes.osl_status()
+        h.expect(available == bool(bpy.app.build_options.cycles_osl) and "OSL" in message, message)
+        print("  installed %s (library %s); %s" % (installed, lib.version, message))
+
+        # A scene built with the installed module (its native.py writes the test normal map).
+        sys.modules.setdefault("ndfbake", module)
+        bpy.ops.wm.read_homefile(use_empty=True)  # keeps the enabled add-on (no factory reset)
+        png = os.path.join(directory, "normal.png")
+        with lib.context() as ctx, ctx.synthesize("bumps", 32, 32, 1) as normal_map:
+            normal_map.save(png)
+        material = h.normal_mapped_material("Installed", png)
+        h.plane_with(material)
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "scene.blend"))
+        before = h.dump_material(material)
+        h.expect(bpy.ops.ndfbake.bake(material="Installed") == {"FINISHED"}, "bake")
+        h.expect(module.bake.is_baked(material), "not baked")
+        h.expect(bpy.ops.ndfbake.revert(material="Installed") == {"FINISHED"}, "revert")
+        h.expect(h.dump_material(material) == before, "revert did not restore the material")
+        import addon_utils
+        addon_utils.disable("ndfbake", default_set=True)
+    finally:
+        h.cleanup(scripts)
+        h.cleanup(directory)
+
+
+# ---- an unusable library, each in its own Blender process ------------------------------------
+
+class FakeLayout:
+    """Enough of UILayout for Panel.draw: records the labels."""
+
+    def __init__(self, labels):
+        self.labels = labels
+        self.enabled = True
+
+    def box(self):
+        return self
+
+    def column(self, **_):
+        return self
+
+    def row(self, **_):
+        return self
+
+    def label(self, text="", icon="NONE"):
+        self.labels.append(text)
+
+    def prop(self, *args, **kwargs):
+        pass
+
+    def operator(self, *args, **kwargs):
+        pass
+
+
+def child_case(case):
+    """Runs inside the child Blender: the add-on installed in BLENDER_USER_SCRIPTS has a bad
+    library. Prints 'CHILD OK <message>' when every check holds."""
+    import addon_utils
+    module = addon_utils.enable("ndfbake", default_set=True, handle_error=None)
+    assert module is not None, "the add-on must enable without its library"
+    lib, message = module.native.status()
+    assert lib is None and message, (lib, message)
+    expected = {"missing": "native library not found", "broken": "could not be loaded",
+                "abi": "has ABI version 99, this add-on needs %d" % module.native.ABI_VERSION}[case]
+    assert expected in message, message
+    assert "\n" not in message
+    material = bpy.data.materials.new("M")
+    labels = []
+    panel = type("P", (), {"layout": FakeLayout(labels)})()
+    module.ui.NDFBAKE_PT_material.draw(panel, type("C", (), {"material": material})())
+    assert "".join("".join(labels).split()) == "".join(message.split()), labels  # the message, wrapped
+    try:
+        bpy.ops.ndfbake.bake(material="M")
+        raise AssertionError("the bake must fail without a library")
+    except RuntimeError as e:
+        assert "ndfbake: " + message in " ".join(str(e).split()), str(e)
+    print("CHILD OK " + message)
+
+
+def _fake_abi_library(path):
+    compiler = shutil.which("cc") or shutil.which("gcc")
+    if compiler is None:
+        return False
+    source = path + ".c"
+    with open(source, "w") as f:
+        f.write("unsigned ndfb_abi_version(void) { return 99; }\n")
+    ok = subprocess.run([compiler, "-shared", "-fPIC", "-o", path, source]).returncode == 0
+    os.remove(source)
+    return ok
+
+
+def test_unusable_library_gives_one_message():
+    zip_path = _zip()
+    for case in ("missing", "broken", "abi"):
+        scripts = h.temp_dir("ndfb-scripts-")
+        try:
+            addons = os.path.join(scripts, "addons")
+            os.makedirs(addons)
+            with zipfile.ZipFile(zip_path) as z:
+                z.extractall(addons)
+            library = os.path.join(addons, "ndfbake", "libndfbake.so")
+            os.remove(library)
+            if case == "broken":
+                with open(library, "wb") as f:
+                    f.write(b"not a shared object")
+            elif case == "abi" and not _fake_abi_library(library):
+                print("  abi: no C compiler to build a fake library; skipped")
+                continue
+            env = {k: v for k, v in os.environ.items() if k != "NDFBAKE_LIBRARY"}
+            env["BLENDER_USER_SCRIPTS"] = scripts
+            proc = subprocess.run(
+                [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
+                 os.path.abspath(__file__), "--", "--child", case],
+                env=env, capture_output=True, text=True, timeout=120)
+            output = proc.stdout + proc.stderr
+            h.expect(proc.returncode == 0 and "CHILD OK" in output, "%s: exit %d\n%s" % (case, proc.returncode, output))
+            h.expect("Traceback" not in output, "%s: a traceback was printed:\n%s" % (case, output))
+            print("  %s: %s" % (case, output.split("CHILD OK ", 1)[1].splitlines()[0]))
+        finally:
+            h.cleanup(scripts)
+
+
+if __name__ == "__main__":
+    if "--child" in sys.argv:
+        child_case(sys.argv[sys.argv.index("--child") + 1])
+    else:
+        h.run([test_zip_holds_the_addon_and_the_library, test_installed_zip_loads_its_own_library_and_bakes,
+               test_unusable_library_gives_one_message])

@@ -1,0 +1,200 @@
+"""The lobe node group computes what native/src/math/brdf.h says, in Cycles and in EEVEE.
+
+Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_nodes.py -- LIB
+
+A 32² normal map is baked; for every lobe slot j and levels 0 and 2 a plane shows, as emission,
+the decode group's outputs read from levelLL_lobej.exr (Closest interpolation, whole texels per
+pixel under an orthographic camera): (widened roughness, amplitude, weight) on one row of planes and the
+tangent-space normal colour on the other. The renders (Cycles and EEVEE, Standard view transform,
+no pixel filter) must match a NumPy evaluation of the rule written from brdf.h, independently of
+nodes.py:  α'² = min(α² + 1.5/κ, 1), α = roughness², amplitude = I(α)/I(α'),
+I(a) = 1 + a²·artanh(k)/k with k = √(1 − a²) (2 at a = 1), κ = (3R − R³)/(1 − R²).
+"""
+import os
+import sys
+
+import bpy
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import test_addon_helpers as h  # noqa: E402
+
+SIZE = 32
+ROUGHNESS = 0.3
+
+
+def sphere_integral(a):
+    a = np.asarray(a, dtype=np.float64)
+    k = np.sqrt(np.maximum(1.0 - a * a, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(k > 1e-6, np.arctanh(np.minimum(k, 1 - 1e-12)) / np.maximum(k, 1e-300), 1.0)
+    return 1.0 + a * a * ratio
+
+
+def reference(rgba, roughness, widening=1.5):
+    """weight, normal colour, widened roughness, amplitude per texel, from brdf.h's rule."""
+    alpha_j = rgba[..., 0].astype(np.float64)
+    v = rgba[..., 1:4].astype(np.float64)
+    r = v / np.maximum(alpha_j, 1e-6)[..., None]
+    big_r = np.minimum(np.linalg.norm(r, axis=-1), 0.9999)
+    mu = r + np.array([0, 0, 1e-5])
+    mu /= np.linalg.norm(mu, axis=-1, keepdims=True)
+    with np.errstate(divide="ignore"):
+        kappa = (3 * big_r - big_r ** 3) / (1 - big_r ** 2)
+        inv_kappa = np.where(kappa > 0, 1.0 / kappa, 1e6)
+    a = roughness ** 2
+    widened = np.sqrt(np.minimum(a * a + widening * inv_kappa, 1.0))
+    amplitude = sphere_integral(a) / sphere_integral(widened)
+    return alpha_j, mu * 0.5 + 0.5, np.sqrt(widened), amplitude
+
+
+def image_rgba(image):
+    px = np.empty(image.size[0] * image.size[1] * 4, dtype=np.float32)
+    image.pixels.foreach_get(px)
+    return px.reshape(image.size[1], image.size[0], 4)  # rows bottom to top, as the render's
+
+
+def probe_material(name, image, output):
+    """Emission of the decode group's outputs for lobe image `image`."""
+    from ndfbake import nodes
+    material = bpy.data.materials.new(name)
+    material.use_nodes = True
+    tree = material.node_tree
+    tree.nodes.remove(tree.nodes["Principled BSDF"])
+    tex = tree.nodes.new("ShaderNodeTexImage")
+    tex.image = image
+    tex.interpolation = "Closest"
+    dec = tree.nodes.new("ShaderNodeGroup")
+    dec.node_tree = nodes.lobe_group()
+    dec.inputs["Roughness"].default_value = ROUGHNESS
+    tree.links.new(tex.outputs["Color"], dec.inputs["Lobe"])
+    tree.links.new(tex.outputs["Alpha"], dec.inputs["Lobe Z"])
+    emission = tree.nodes.new("ShaderNodeEmission")
+    if output == "normal":
+        tree.links.new(dec.outputs["Normal"], emission.inputs["Color"])
+    else:
+        combine = tree.nodes.new("ShaderNodeCombineXYZ")
+        tree.links.new(dec.outputs["Roughness"], combine.inputs["X"])
+        tree.links.new(dec.outputs["Amplitude"], combine.inputs["Y"])
+        tree.links.new(dec.outputs["Weight"], combine.inputs["Z"])
+        tree.links.new(combine.outputs[0], emission.inputs["Color"])
+    tree.links.new(emission.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+    return material
+
+
+def render(scene, engine, path, width, height):
+    scene.render.engine = engine
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    scene.render.resolution_percentage = 100
+    scene.render.filter_size = 0.0
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.image_settings.color_depth = "32"
+    scene.view_settings.view_transform = "Standard"
+    scene.view_settings.look = "None"
+    scene.view_settings.exposure = 0.0
+    scene.view_settings.gamma = 1.0
+    scene.cycles.samples = 1
+    scene.cycles.use_denoising = False
+    scene.cycles.filter_width = 0.01
+    scene.cycles.device = "CPU"
+    scene.eevee.taa_render_samples = 1
+    scene.world = None
+    scene.render.filepath = path
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(path)
+    return image_rgba(image)
+
+
+def test_decode_group_matches_the_rule_in_both_engines():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory, pattern="scratches", size=SIZE, roughness=ROUGHNESS)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=4))
+        # Level 0 (one fine normal per texel: κ huge) and level 2 (8x8 texels of 16 normals each:
+        # the widening regime), every lobe slot.
+        folder = bpy.path.abspath("//%s.ndfbake" % material.name)
+        images = {}
+        for level in (0, 2):
+            for j in range(4):
+                images[level, j] = bpy.data.images.load(os.path.join(folder, "level%02d_lobe%d.exr" % (level, j)))
+                images[level, j].colorspace_settings.name = "Non-Color"
+                images[level, j].alpha_mode = "CHANNEL_PACKED"
+        scene = bpy.context.scene
+        for obj in list(scene.objects):
+            bpy.data.objects.remove(obj)
+        # Planes of side 2 at x = 2j (lobe j); rows from the top: level 0 scalars, level 0 normal
+        # colour, level 2 scalars, level 2 normal colour.
+        rows = [(0, "scalars"), (0, "normal"), (2, "scalars"), (2, "normal")]
+        for j in range(4):
+            for row, (level, output) in enumerate(rows):
+                bpy.ops.mesh.primitive_plane_add(size=2.0, location=(2.0 * j, -2.0 * row, 0.0))
+                bpy.context.active_object.data.materials.append(
+                    probe_material("probe L%d %d %s" % (level, j, output), images[level, j], output))
+        bpy.ops.object.camera_add(location=(3.0, -3.0, 5.0), rotation=(0.0, 0.0, 0.0))
+        camera = bpy.context.active_object
+        camera.data.type = "ORTHO"
+        camera.data.ortho_scale = 8.0
+        scene.camera = camera
+        width, height = 4 * SIZE, 4 * SIZE
+
+        expected = {}
+        for (level, j), image in images.items():
+            rgba = image_rgba(image)
+            h.expect(np.isfinite(rgba).all(), "level %d lobe %d has non-finite texels" % (level, j))
+            h.expect(np.all(np.linalg.norm(rgba[..., 1:], axis=-1) <= rgba[..., 0] * 1.001 + 1e-3),
+                     "level %d lobe %d: |alpha r| > alpha: the alpha channel is not read raw" % (level, j))
+            weight, normal, rough, amplitude = reference(rgba, ROUGHNESS)
+            scale = SIZE // rgba.shape[0]  # texels of level 2 cover scale x scale pixels
+            up = lambda a: np.repeat(np.repeat(a, scale, axis=0), scale, axis=1)  # noqa: E731
+            expected[level, j] = (up(np.stack([rough, amplitude, weight], axis=-1)), up(normal))
+            # The comparison must be able to tell the rule from its neighbours (2/κ, Filament's).
+            occupied = weight > 1e-3
+            other = reference(rgba, ROUGHNESS, widening=2.0)[2]
+            sensitivity = float(np.abs(other - rough)[occupied].max()) if occupied.any() else 0.0
+            print("level %d lobe %d: %d occupied texels, roughness' %.3f..%.3f, amplitude %.3f..%.3f, "
+                  "1.5/κ vs 2/κ differ by up to %.3f" % (
+                      level, j, int(occupied.sum()), float(rough[occupied].min(initial=1)),
+                      float(rough[occupied].max(initial=0)), float(amplitude[occupied].min(initial=1)),
+                      float(amplitude[occupied].max(initial=0)), sensitivity))
+            if level == 2 and j == 0:
+                h.expect(sensitivity > 0.02, "level 2 does not exercise the widening rule")
+
+        for engine in ("CYCLES", "BLENDER_EEVEE"):
+            got = render(scene, engine, os.path.join(directory, engine + ".exr"), width, height)
+            got = got[::-1]  # rows top to bottom
+            for j in range(4):
+                x = slice(j * SIZE, (j + 1) * SIZE)
+                for row, (level, output) in enumerate(rows):
+                    want_scalars, want_normal = expected[level, j]
+                    occupied = want_scalars[..., 2] > 1e-3
+                    # Rendered rows are top to bottom; Blender's image rows bottom to top.
+                    block = got[row * SIZE:(row + 1) * SIZE, x, :3][::-1]
+                    # Half-float textures and float32 nodes: 2e-3 absolute is plenty.
+                    if output == "scalars":
+                        err = np.abs(block - want_scalars)
+                        for c, what in enumerate(("roughness", "amplitude", "weight")):
+                            mask = occupied if c < 2 else np.ones_like(occupied)
+                            worst = float(err[..., c][mask].max()) if mask.any() else 0.0
+                            h.expect(worst < 2e-3, "%s level %d lobe %d %s: max error %.4g" % (
+                                engine, level, j, what, worst))
+                    else:
+                        worst = float(np.abs(block - want_normal)[occupied].max()) if occupied.any() else 0.0
+                        h.expect(worst < 2e-3, "%s level %d lobe %d normal: max error %.4g" % (
+                            engine, level, j, worst))
+            print("%s: decode group matches the rule on levels 0 and 2, 4 lobes" % engine)
+    finally:
+        h.cleanup(directory)
+
+
+def test_sphere_integral_limits():
+    # The reference itself: I(1) = 2, I(0) = 1, and brdf.h's closed form at a = 0.5.
+    h.expect(abs(sphere_integral(1.0) - 2.0) < 1e-9, "I(1) != 2")
+    h.expect(abs(sphere_integral(1e-6) - 1.0) < 1e-6, "I(0) != 1")
+    k = np.sqrt(0.75)
+    h.expect(abs(sphere_integral(0.5) - (1 + 0.25 * np.arctanh(k) / k)) < 1e-12, "I(0.5)")
+
+
+if __name__ == "__main__":
+    h.import_addon()
+    h.run([test_sphere_integral_limits, test_decode_group_matches_the_rule_in_both_engines])

@@ -1,0 +1,80 @@
+"""Tiny renders of a baked material in EEVEE (surfaceless EGL in `blender -b`) and Cycles (CPU).
+
+Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_render.py -- LIB
+
+A tilted plane with a 64² bumps normal map, baked with 4 lobes, lit by a sun, seen by a camera:
+64² renders (EEVEE 4 TAA samples, Cycles 4 samples, no denoiser) must run without errors and give
+finite, non-black images, and close to the unbaked material's (this is a close-up: filtering must
+not change the overall brightness much). Image-error comparisons against a reference are a later
+task.
+"""
+import os
+import sys
+
+import bpy
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import test_addon_helpers as h  # noqa: E402
+
+SIZE = 64
+
+
+def setup_scene():
+    scene = bpy.context.scene
+    bpy.ops.object.camera_add(location=(0.0, -2.6, 1.6), rotation=(1.05, 0.0, 0.0))
+    scene.camera = bpy.context.active_object
+    bpy.ops.object.light_add(type="SUN", rotation=(0.6, 0.3, 0.4))
+    bpy.context.active_object.data.energy = 4.0
+    world = bpy.data.worlds.new("World")
+    world.color = (0.05, 0.05, 0.05)
+    scene.world = world
+    scene.render.resolution_x = scene.render.resolution_y = SIZE
+    scene.render.resolution_percentage = 100
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.view_settings.view_transform = "Standard"
+    scene.cycles.samples = 4
+    scene.cycles.use_denoising = False
+    scene.cycles.device = "CPU"
+    scene.eevee.taa_render_samples = 4
+    return scene
+
+
+def render(scene, engine, path):
+    scene.render.engine = engine
+    scene.render.filepath = path
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(path)
+    px = np.empty(SIZE * SIZE * 4, dtype=np.float32)
+    image.pixels.foreach_get(px)
+    bpy.data.images.remove(image)
+    return px.reshape(SIZE, SIZE, 4)[..., :3]
+
+
+def test_eevee_and_cycles_render_the_baked_material():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory, pattern="bumps", size=64, roughness=0.35, metallic=0.5)
+        scene = setup_scene()
+        plain = {engine: render(scene, engine, os.path.join(directory, "plain-%s.exr" % engine))
+                 for engine in ("BLENDER_EEVEE", "CYCLES")}
+        bake.bake_material(material, bake.BakeSettings(max_lobes=4))
+        for engine in ("BLENDER_EEVEE", "CYCLES"):
+            path = os.path.join(directory, "baked-%s.exr" % engine)
+            pixels = render(scene, engine, path)
+            h.expect(os.path.isfile(path), "%s wrote no image" % engine)
+            h.expect(np.isfinite(pixels).all(), "%s: non-finite pixels" % engine)
+            mean, plain_mean = float(pixels.mean()), float(plain[engine].mean())
+            lit = float((pixels.max(axis=-1) > 0.02).mean())
+            print("  %s: mean %.4f (unbaked %.4f), max %.3f, %.0f%% of pixels lit" % (
+                engine, mean, plain_mean, float(pixels.max()), 100 * lit))
+            h.expect(mean > 0.01 and lit > 0.3, "%s: the baked material renders black" % engine)
+            h.expect(0.6 < mean / plain_mean < 1.4, "%s: baked %.4f vs unbaked %.4f" % (engine, mean, plain_mean))
+    finally:
+        h.cleanup(directory)
+
+
+if __name__ == "__main__":
+    h.import_addon()
+    h.run([test_eevee_and_cycles_render_the_baked_material])

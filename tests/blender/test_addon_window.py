@@ -1,0 +1,203 @@
+"""The Bake button's path in a real Blender window (under Xvfb): the panel draws, the modal
+operator bakes on a worker thread while the UI keeps running, and Esc cancels part way.
+
+Run: xvfb-run -a -s "-screen 0 1280x800x24" blender --factory-startup --enable-event-simulate \
+         --python tests/blender/test_addon_window.py -- LIB ZIP OUTDIR
+
+Steps, driven by bpy.app.timers from Blender's own event loop:
+1. A saved scene (a plane, a 64² normal map); the Properties editor shows the material tab.
+2. ndfbake.bake is invoked as the button does (INVOKE_DEFAULT in the Properties editor): it must
+   return RUNNING_MODAL at once, and Blender's timers must keep firing while the worker fits;
+   it finishes with the material baked. A screenshot of the window (the Properties editor
+   scrolled to the ndfbake panel) goes to OUTDIR.
+3. A re-bake with other settings is started and an Esc press is simulated while the worker fits:
+   the bake stops, the previous bake's files and nodes are untouched.
+The worker is held at its first "fit" progress call until the main thread has seen what it
+checks (a gate in BakeJob.run), so the test does not race the fit on a loaded machine.
+The process exits 0 when every check holds, 1 otherwise (printed).
+"""
+import hashlib
+import os
+import sys
+import time
+import traceback
+
+import bpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import test_addon_helpers as h  # noqa: E402
+
+state = {"step": "start", "ticks": 0, "deadline": time.time() + 120, "gate_open": False}
+
+
+def _install_gate():
+    """Holds the worker thread at its first "fit" progress call until the main thread opens the
+    gate or the job is cancelled, so that what the test observes does not depend on how fast the
+    machine fits (the progress callback runs on the worker; the modal operator on the main thread)."""
+    from ndfbake import bake
+    original = bake.BakeJob.run
+
+    def gated_run(self, progress=None):
+        def gate(stage, fraction):
+            deadline = time.time() + 60
+            while stage == "fit" and not state["gate_open"] and not self.cancelled and time.time() < deadline:
+                time.sleep(0.01)
+            return False
+        return original(self, gate)
+    bake.BakeJob.run = gated_run
+
+
+def _finish(ok, message):
+    if "dir" in state:
+        h.cleanup(state["dir"])
+    print(("PASS " if ok else "FAIL ") + "test_addon_window: " + message, flush=True)
+    os._exit(0 if ok else 1)
+
+
+def _properties_area():
+    window = bpy.context.window_manager.windows[0]
+    areas = sorted(window.screen.areas, key=lambda a: a.width * a.height, reverse=True)
+    area = next((a for a in areas if a.type == "PROPERTIES"), None)
+    if area is None:  # make the largest area a Properties editor
+        area = areas[0]
+        area.type = "PROPERTIES"
+    area.spaces.active.context = "MATERIAL"
+    region = next(r for r in area.regions if r.type == "WINDOW")
+    return window, area, region
+
+
+def _snapshot(directory):
+    result = {}
+    for name in h.listing(directory):
+        path = os.path.join(directory, name)
+        result[name] = hashlib.sha256(open(path, "rb").read()).hexdigest() if os.path.isfile(path) else "dir"
+    return result
+
+
+def _invoke_bake():
+    window, area, region = _properties_area()
+    with bpy.context.temp_override(window=window, area=area, region=region):
+        return bpy.ops.ndfbake.bake("INVOKE_DEFAULT")
+
+
+def tick():
+    try:
+        return _tick()
+    except Exception:
+        traceback.print_exc()
+        _finish(False, "exception")
+
+
+def _tick():
+    from ndfbake import bake, operators
+    state["ticks"] += 1
+    if time.time() > state["deadline"]:
+        _finish(False, "timed out in step %s" % state["step"])
+    step = state["step"]
+    if step == "start":
+        directory = state["dir"] = h.temp_dir()
+        material = h.normal_mapped_material("Window", h.write_normal_map(os.path.join(directory, "normal.png"),
+                                                                         "bumps", 64))
+        for other in list(bpy.data.objects):  # the startup cube, camera and light
+            bpy.data.objects.remove(other)
+        obj = h.plane_with(material)
+        bpy.context.view_layer.objects.active = obj
+        obj.select_set(True)
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "scene.blend"))
+        _properties_area()[1].tag_redraw()
+        state["step"] = "invoke"
+        return 0.5  # the Properties editor picks up the active object's material when it redraws
+    elif step == "invoke":
+        result = _invoke_bake()
+        h.expect(result == {"RUNNING_MODAL"}, "the Bake button did not start a modal bake: %s" % result)
+        state["ticks_while_fitting"] = 0
+        state["step"] = "baking"
+    elif step == "baking":
+        job = operators.running_job
+        if job is not None:
+            if job.stage == "fit" and not job.done:
+                state["ticks_while_fitting"] += 1  # Blender's event loop runs while the worker fits
+            if state["ticks_while_fitting"] >= 5:
+                state["gate_open"] = True
+            return 0.05
+        material = bpy.data.materials["Window"]
+        h.expect(bake.is_baked(material), "the modal bake did not bake the material")
+        h.expect(state["ticks_while_fitting"] >= 5, "the UI loop did not run during the bake")
+        _properties_area()[1].tag_redraw()
+        state["step"] = "screenshot"
+        return 0.5  # let the panel redraw with the result
+    elif step == "screenshot":
+        # The Properties editor full-window, scrolled to its end, where the ndfbake panel is.
+        window, area, region = _properties_area()
+        with bpy.context.temp_override(window=window, area=area, region=region):
+            bpy.ops.screen.screen_full_area()
+        state["step"] = "scroll"
+        return 0.5
+    elif step == "scroll":
+        window, area, region = _properties_area()
+        with bpy.context.temp_override(window=window, area=area, region=region):
+            for _ in range(40):
+                bpy.ops.view2d.scroll_down(deltay=200)
+        area.tag_redraw()
+        state["step"] = "shoot"
+        return 0.5
+    elif step == "shoot":
+        window, area, region = _properties_area()
+        path = os.path.join(state["out"], "ndfbake-panel.png")
+        with bpy.context.temp_override(window=window, area=area, region=region):
+            bpy.ops.screen.screenshot(filepath=path)
+            bpy.ops.screen.back_to_previous()
+        h.expect(os.path.isfile(path) and os.path.getsize(path) > 1000, "no screenshot")
+        print("screenshot of the panel: %s" % path, flush=True)
+        # Re-bake with other settings (a finished re-bake would change nodes and files), Esc while it fits.
+        directory = state["dir"]
+        material = bpy.data.materials["Window"]
+        material.ndfbake_settings.max_lobes = 2
+        state["gate_open"] = False
+        state["baked"] = (h.dump_material(material), _snapshot(directory))
+        h.expect(_invoke_bake() == {"RUNNING_MODAL"}, "re-bake did not start")
+        state["step"] = "cancel"
+    elif step == "cancel":
+        job = operators.running_job
+        if job is None:
+            _finish(False, "the re-bake ended before it could be cancelled")
+        if job.stage != "fit":
+            return 0.02
+        state["job"] = job
+        state["esc_at"] = (job.stage, job.fraction, time.time())
+        window = bpy.context.window_manager.windows[0]
+        window.event_simulate(type="ESC", value="PRESS")
+        window.event_simulate(type="ESC", value="RELEASE")
+        state["step"] = "cancelled"
+        return 0.05
+    elif step == "cancelled":
+        if operators.running_job is not None:
+            return 0.05
+        job = state["job"]
+        print("Esc during %s at %.0f%%: the bake ended %.2f s later with %s" % (
+            state["esc_at"][0], 100 * state["esc_at"][1], time.time() - state["esc_at"][2],
+            job.error and job.error.code), flush=True)
+        h.expect(job.cancelled and job.error is not None and job.error.code == "CANCELLED",
+                 "Esc did not cancel the bake")
+        material = bpy.data.materials["Window"]
+        # The scene image was rewritten on disk for the re-bake; compare the bake's own files.
+        nodes_before, files_before = state["baked"]
+        h.expect(h.dump_material(material) == nodes_before, "the cancelled re-bake changed the material")
+        files_after = _snapshot(state["dir"])
+        h.expect(files_after == files_before, "the cancelled re-bake changed files: %s" % sorted(
+            name for name in set(files_before) | set(files_after) if files_before.get(name) != files_after.get(name)))
+        _finish(True, "modal bake, screenshot and Esc cancel work (%d UI ticks)" % state["ticks"])
+    return 0.05
+
+
+def main():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    state["out"] = os.path.abspath(argv[2]) if len(argv) > 2 else h.temp_dir("ndfb-window-")
+    os.makedirs(state["out"], exist_ok=True)
+    h.import_addon()
+    bpy.context.preferences.view.show_splash = False
+    _install_gate()
+    bpy.app.timers.register(tick, first_interval=1.0)
+
+
+main()
