@@ -2,7 +2,8 @@
 # Installs what ndfbake needs on Debian 12 from Debian's own packages. Run as root (or via sudo).
 set -euo pipefail
 packages=(build-essential cmake pkg-config libopenimageio-dev libopenexr-dev openimageio-tools
-          libgtest-dev python3 blender assimp-testmodels xvfb)
+          libgtest-dev python3 blender assimp-testmodels xvfb
+          clang libclang-rt-14-dev)  # clang + libFuzzer: the fuzz targets (scripts/fuzz.sh)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,8 +1,40 @@
 #!/usr/bin/env bash
-# The test command: installs dependencies, builds, and runs every test under ctest.
+# The test command: installs dependencies, builds, and runs every test under ctest; then the same
+# suite built with AddressSanitizer + UndefinedBehaviorSanitizer (build-asan, NDFBAKE_SANITIZE);
+# then each libFuzzer target for a short while (build-fuzz, when clang and libFuzzer are installed).
+#   NDFBAKE_SANITIZE_TESTS=0   skip the sanitizer build
+#   NDFBAKE_FUZZ_SECONDS=N     seconds per fuzz target (default 20; 0 skips fuzzing)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
+start=$SECONDS
+stage() { echo "== test.sh: $1 ($((SECONDS - start)) s so far)"; }
+
 bash "$root/scripts/install-deps.sh"
 bash "$root/scripts/build.sh"
-cd "${NDFBAKE_BUILD_DIR:-$root/build}"
-ctest --output-on-failure -j "$(nproc)"
+stage "ctest (build)"
+(cd "${NDFBAKE_BUILD_DIR:-$root/build}" && ctest --output-on-failure -j "$(nproc)")
+
+if [ "${NDFBAKE_SANITIZE_TESTS:-1}" != 0 ]; then
+  # Every test again with ASan + UBSan; any report fails it (tests/CMakeLists.txt sets the
+  # options and tests/lsan.supp). The Blender tests load the library into Blender itself, which
+  # cannot take an ASan-instrumented library, so they run in the plain build only.
+  asan=${NDFBAKE_ASAN_BUILD_DIR:-$root/build-asan}
+  stage "sanitizer build ($asan)"
+  cmake -S "$root" -B "$asan" -DCMAKE_BUILD_TYPE=Release -DNDFBAKE_SANITIZE=ON >/dev/null
+  cmake --build "$asan" -j "$(nproc)"
+  stage "ctest (sanitizer build)"
+  (cd "$asan" && ctest --output-on-failure -j "$(nproc)" -LE blender)
+fi
+
+fuzz_seconds=${NDFBAKE_FUZZ_SECONDS:-20}
+if [ "$fuzz_seconds" != 0 ]; then
+  if bash "$root/scripts/fuzz.sh" --check; then
+    for target in decode bake tangent; do
+      stage "fuzz $target"
+      NDFBAKE_FUZZ_KEEP=0 bash "$root/scripts/fuzz.sh" "$target" "$fuzz_seconds"
+    done
+  else
+    echo "== test.sh: fuzzing skipped: clang++ with libFuzzer is not installed (apt-get install clang libclang-rt-14-dev)"
+  fi
+fi
+stage "all passed"

@@ -97,6 +97,12 @@ typedef struct ndfb_fit_options {
     uint32_t threads;             /* 0: all cores */
     ndfb_progress_fn progress;
     void* progress_user;
+    /* Memory a fit or bake may use (its estimated peak: the decoded map, the lobe pyramid, the
+       largest working set of the fit, the texture being written). A larger job is refused up
+       front with NDFB_ERROR_OUT_OF_MEMORY, before any pixel is read, with the estimate and the
+       limit in the message. 0 (default): the machine's physical memory. report.json records the
+       estimate and the process's measured peak ("peak_memory_bytes"). */
+    uint64_t max_memory_bytes;
 } ndfb_fit_options;
 
 typedef struct ndfb_write_options {

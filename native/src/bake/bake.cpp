@@ -10,9 +10,11 @@
 #include <set>
 
 #include "bake/level_stats.h"
+#include "bake/memory_budget.h"
 #include "error.h"
 #include "io/atomic_file.h"
 #include "io/color_decode.h"
+#include "io/image_read.h"
 #include "io/json_writer.h"
 #include "ndf/spherical_em.h"
 
@@ -145,10 +147,19 @@ void write_summary(JsonWriter& json, const char* key, const ErrorSummary& summar
     json.begin_object(key).value("mean", summary.mean).value("p95", summary.p95).end_object();
 }
 
+// The layout of the file a map was decoded from (none for pixels from memory or synthesized).
+SourceLayout source_layout(const DecodeResult& decoded)
+{
+    if (decoded.format == "memory" || decoded.format == "synthetic" || decoded.bits_per_channel <= 0) return {};
+    return {decoded.channels, std::max(1, decoded.bits_per_channel / 8), decoded.float_data};
+}
+
 std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded, const PyramidSettings& settings,
                         const WriteSettings& write, const std::vector<LevelStats>& stats,
                         const BakeTimings& timings, const std::vector<std::string>& files)
 {
+    const MemoryEstimate memory = estimate_bake_memory(pyramid.source.width, pyramid.source.height,
+                                                       source_layout(decoded), settings, !write.color_path.empty());
     JsonWriter json;
     json.begin_object();
     json.value("format_version", kFileFormatVersion).value("ndfbake_version", NDFBAKE_VERSION_STRING);
@@ -220,6 +231,11 @@ std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded,
         .value("measure", timings.measure)
         .value("write", timings.write)
         .end_object();
+    // Measured: the process's peak resident memory so far (getrusage), which includes the host
+    // application's own; estimated: this bake's peak as checked against the limit before it ran.
+    json.value("peak_memory_bytes", process_peak_memory())
+        .value("estimated_memory_bytes", memory.peak())
+        .value("memory_limit_bytes", effective_memory_limit(settings.max_memory_bytes));
     json.begin_array("files");
     for (const std::string& f : files) json.value(nullptr, fs::path(f).filename().string());
     json.value(nullptr, "report.json");
@@ -349,6 +365,22 @@ BakeOutcome bake_file(const std::string& input_path, const std::string& out_dir,
 {
     // Fail on an unwritable output before spending minutes on the fit.
     ensure_writable_directory(out_dir);
+    // And on a map too large for the memory allowed, from its header alone. A header the decoder
+    // refuses anyway (no pixels, wrong channel count, over max_pixels) gets the decoder's error.
+    {
+        const std::unique_ptr<OIIO::ImageInput> header = open_image(input_path);
+        const OIIO::ImageSpec& spec = header->spec();
+        if (spec.width > 0 && spec.height > 0 && spec.nchannels >= 2 && spec.nchannels <= 4 &&
+            uint64_t(spec.width) * uint64_t(spec.height) <= decode.max_pixels) {
+            const OIIO::TypeDesc::BASETYPE base = OIIO::TypeDesc::BASETYPE(spec.format.basetype);
+            const SourceLayout layout{spec.nchannels, int(spec.format.size()),
+                                      base == OIIO::TypeDesc::HALF || base == OIIO::TypeDesc::FLOAT ||
+                                          base == OIIO::TypeDesc::DOUBLE};
+            check_memory_budget(estimate_bake_memory(spec.width, spec.height, layout, settings, !write.color_path.empty()),
+                                settings.max_memory_bytes, spec.width, spec.height, settings.fit.max_lobes,
+                                "cannot bake '" + input_path + "'");
+        }
+    }
     BakeTimings timings;
     auto start = std::chrono::steady_clock::now();
     check_progress(progress, "decode", 0.0);

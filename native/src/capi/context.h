@@ -3,8 +3,10 @@
 #pragma once
 
 #include <exception>
+#include <mutex>
 #include <new>
 #include <string>
+#include <unordered_set>
 
 #include "error.h"
 #include "ndfbake.h"
@@ -15,12 +17,49 @@ struct ndfb_context_s {
 
 namespace ndfbake {
 
+// Every live context, so that a call with a destroyed (or never created) context is refused with
+// NDFB_ERROR_INVALID_ARGUMENT instead of touching freed memory inside the host process. A freed
+// address handed out again by a later ndfb_context_create becomes valid again: the check catches
+// use after destroy, not every stale handle.
+class ContextRegistry {
+public:
+    static ContextRegistry& instance()
+    {
+        static ContextRegistry* registry = new ContextRegistry;  // never destroyed: safe at exit
+        return *registry;
+    }
+    void add(ndfb_context ctx)
+    {
+        std::lock_guard lock(mutex_);
+        live_.insert(ctx);
+    }
+    // True if ctx was live (and is now removed).
+    bool remove(ndfb_context ctx)
+    {
+        std::lock_guard lock(mutex_);
+        return live_.erase(ctx) > 0;
+    }
+    bool live(ndfb_context ctx)
+    {
+        std::lock_guard lock(mutex_);
+        return live_.count(ctx) > 0;
+    }
+
+private:
+    std::mutex mutex_;
+    std::unordered_set<ndfb_context> live_;
+};
+
+inline constexpr const char* kDeadContextMessage =
+    "the context was destroyed or was never created by ndfb_context_create";
+
 // Runs `body`, mapping every failure to a status and ctx's last-error text.
 template <typename Body>
 ndfb_status guarded(ndfb_context ctx, Body&& body)
 {
     std::string message;
     ndfb_status status = NDFB_OK;
+    if (ctx && !ContextRegistry::instance().live(ctx)) return NDFB_ERROR_INVALID_ARGUMENT;
     try {
         body();
     } catch (const Error& e) {

@@ -3,6 +3,7 @@
 #include "ndfbake.h"
 
 #include <algorithm>
+#include <cstddef>
 #include <cstring>
 #include <memory>
 #include <new>
@@ -10,6 +11,7 @@
 
 #include "bake/bake.h"
 #include "bake/level_stats.h"
+#include "bake/memory_budget.h"
 #include "error.h"
 #include "io/normal_encode.h"
 #include "math/sphere.h"
@@ -39,6 +41,18 @@ void require(bool condition, const std::string& message)
     if (!condition) throw Error(Status::invalid_argument, message);
 }
 
+// An enum argument or field as the int a C (or ctypes) caller stored in it. A value outside the
+// enumerators cannot be read through the C++ enum type (undefined behaviour, which UBSan reports
+// and the optimizer may exploit in a switch), so the bytes are read as int and checked as such.
+template <typename Enum>
+int raw(const Enum& value)
+{
+    static_assert(sizeof(Enum) == sizeof(int));
+    int v;
+    std::memcpy(&v, &value, sizeof v);
+    return v;
+}
+
 template <typename Options>
 void require_options(const Options* options, const char* name)
 {
@@ -52,17 +66,19 @@ DecodeOptions to_decode(const ndfb_decode_options* o)
     DecodeOptions d;
     if (!o) return d;
     require_options(o, "decode options");
-    require(o->convention == NDFB_CONVENTION_OPENGL || o->convention == NDFB_CONVENTION_DIRECTX,
-            "decode options: unknown convention");
-    require(o->srgb == NDFB_SRGB_AS_DATA || o->srgb == NDFB_SRGB_LINEARIZE, "decode options: unknown sRGB policy");
+    const int convention = raw(o->convention), srgb = raw(o->srgb);
+    require(convention == NDFB_CONVENTION_OPENGL || convention == NDFB_CONVENTION_DIRECTX,
+            "decode options: unknown convention " + std::to_string(convention));
+    require(srgb == NDFB_SRGB_AS_DATA || srgb == NDFB_SRGB_LINEARIZE,
+            "decode options: unknown sRGB policy " + std::to_string(srgb));
     require(o->max_pixels > 0, "decode options: max_pixels must be positive");
-    d.convention = o->convention == NDFB_CONVENTION_DIRECTX ? Convention::directx : Convention::opengl;
-    d.srgb = o->srgb == NDFB_SRGB_LINEARIZE ? SrgbPolicy::linearize : SrgbPolicy::treat_as_data;
+    d.convention = convention == NDFB_CONVENTION_DIRECTX ? Convention::directx : Convention::opengl;
+    d.srgb = srgb == NDFB_SRGB_LINEARIZE ? SrgbPolicy::linearize : SrgbPolicy::treat_as_data;
     d.max_pixels = o->max_pixels;
     return d;
 }
 
-BaseBrdf to_brdf(ndfb_brdf brdf, float parameter)
+BaseBrdf to_brdf(int brdf, float parameter)
 {
     switch (brdf) {
     case NDFB_BRDF_GGX: return BaseBrdf::ggx(parameter);
@@ -70,12 +86,12 @@ BaseBrdf to_brdf(ndfb_brdf brdf, float parameter)
     case NDFB_BRDF_LAMBERT: return BaseBrdf::lambert();
     case NDFB_BRDF_BECKMANN: return BaseBrdf::beckmann(parameter);
     }
-    throw Error(Status::invalid_argument, "unknown BRDF " + std::to_string(int(brdf)));
+    throw Error(Status::invalid_argument, "unknown BRDF " + std::to_string(brdf));
 }
 
-WrapMode to_wrap(ndfb_wrap wrap)
+WrapMode to_wrap(int wrap)
 {
-    require(wrap == NDFB_WRAP_REPEAT || wrap == NDFB_WRAP_CLAMP, "unknown wrap mode");
+    require(wrap == NDFB_WRAP_REPEAT || wrap == NDFB_WRAP_CLAMP, "unknown wrap mode " + std::to_string(wrap));
     return wrap == NDFB_WRAP_CLAMP ? WrapMode::clamp : WrapMode::wrap;
 }
 
@@ -91,17 +107,21 @@ PyramidSettings to_pyramid(const ndfb_fit_options* o)
     require(o->max_iterations >= 1 && o->max_iterations <= 1000,
             "max_iterations must be in 1..1000, got " + std::to_string(o->max_iterations));
     require(o->threads <= 1024, "threads must be at most 1024");
-    require(o->method == NDFB_FIT_PER_LEVEL || o->method == NDFB_FIT_HIERARCHICAL, "unknown fit method");
+    const int method = raw(o->method);
+    require(method == NDFB_FIT_PER_LEVEL || method == NDFB_FIT_HIERARCHICAL, "unknown fit method " + std::to_string(method));
     PyramidSettings s;
     s.fit.max_lobes = int(o->max_lobes);
     s.fit.tolerance = o->tolerance;
     s.fit.em.max_iterations = int(o->max_iterations);
-    s.brdf = to_brdf(o->brdf, o->brdf_parameter);
-    s.wrap = to_wrap(o->wrap);
+    s.brdf = to_brdf(raw(o->brdf), o->brdf_parameter);
+    s.wrap = to_wrap(raw(o->wrap));
     s.align = o->align != 0;
     s.alignment_strength = o->alignment_strength;
     s.threads = int(o->threads);
-    s.method = o->method == NDFB_FIT_HIERARCHICAL ? FitMethod::hierarchical : FitMethod::per_level;
+    s.method = method == NDFB_FIT_HIERARCHICAL ? FitMethod::hierarchical : FitMethod::per_level;
+    // Added after ABI 1's first release: read only from callers whose struct has it.
+    if (o->struct_size >= offsetof(ndfb_fit_options, max_memory_bytes) + sizeof(o->max_memory_bytes))
+        s.max_memory_bytes = o->max_memory_bytes;
     return s;
 }
 
@@ -110,8 +130,10 @@ WriteSettings to_write(const ndfb_write_options* o)
     WriteSettings w;
     if (!o) return w;
     require_options(o, "write options");
-    require(o->precision == NDFB_PRECISION_HALF || o->precision == NDFB_PRECISION_FLOAT, "unknown precision");
-    w.precision = o->precision == NDFB_PRECISION_FLOAT ? PixelPrecision::single : PixelPrecision::half;
+    const int precision = raw(o->precision);
+    require(precision == NDFB_PRECISION_HALF || precision == NDFB_PRECISION_FLOAT,
+            "unknown precision " + std::to_string(precision));
+    w.precision = precision == NDFB_PRECISION_FLOAT ? PixelPrecision::single : PixelPrecision::half;
     if (o->color_path) w.color_path = o->color_path;
     if (o->source_name) w.source_name = o->source_name;
     return w;
@@ -155,16 +177,33 @@ NDFB_API ndfb_status ndfb_context_create(ndfb_context* out)
         g_create_error = "out of memory";
         return NDFB_ERROR_OUT_OF_MEMORY;
     }
+    try {
+        ContextRegistry::instance().add(*out);
+    } catch (...) {
+        delete *out;
+        *out = nullptr;
+        g_create_error = "out of memory";
+        return NDFB_ERROR_OUT_OF_MEMORY;
+    }
     return NDFB_OK;
 }
 
-NDFB_API void ndfb_context_destroy(ndfb_context ctx) { delete ctx; }
+// A second destroy, or a handle that was never a context, is ignored rather than freed twice.
+NDFB_API void ndfb_context_destroy(ndfb_context ctx)
+{
+    if (ctx && ContextRegistry::instance().remove(ctx)) delete ctx;
+}
 
-NDFB_API const char* ndfb_last_error(ndfb_context ctx) { return ctx ? ctx->last_error.c_str() : g_create_error.c_str(); }
+NDFB_API const char* ndfb_last_error(ndfb_context ctx)
+{
+    if (!ctx) return g_create_error.c_str();
+    if (!ContextRegistry::instance().live(ctx)) return kDeadContextMessage;
+    return ctx->last_error.c_str();
+}
 
 NDFB_API const char* ndfb_status_name(ndfb_status status)
 {
-    switch (status) {
+    switch (raw(status)) {
     case NDFB_OK: return "ok";
     case NDFB_ERROR_INVALID_ARGUMENT: return "invalid argument";
     case NDFB_ERROR_FILE_NOT_FOUND: return "file not found";
@@ -277,6 +316,9 @@ NDFB_API ndfb_status ndfb_fit(ndfb_context ctx, ndfb_normal_map map, const ndfb_
         *out = nullptr;
         const PyramidSettings settings = to_pyramid(options);
         const StageProgress progress = to_progress(options);
+        const NormalMap& m = map->decoded.map;
+        check_memory_budget(estimate_bake_memory(m.width, m.height, SourceLayout{}, settings, false),
+                            settings.max_memory_bytes, m.width, m.height, settings.fit.max_lobes, "cannot fit the map");
         auto result = std::make_unique<ndfb_pyramid_s>();
         result->pyramid = build_lobe_pyramid(map->decoded.map, settings, [&](double fraction) {
             return !progress || progress("fit", fraction);
@@ -326,7 +368,7 @@ NDFB_API ndfb_status ndfb_pyramid_level_stats(ndfb_context ctx, ndfb_pyramid p, 
         require(ctx && out, "ndfb_pyramid_level_stats: ctx and out must not be null");
         const LobePyramid& pyramid = pyramid_of(p);
         require_level(pyramid, level);
-        const LevelStats s = measure_level(pyramid, int(level), to_brdf(brdf, brdf_parameter), TexelFitSettings{},
+        const LevelStats s = measure_level(pyramid, int(level), to_brdf(raw(brdf), brdf_parameter), TexelFitSettings{},
                                            int(max_texels), kReportSampleCap, false);
         *out = {};
         out->width = uint32_t(s.size.width);
@@ -353,8 +395,8 @@ NDFB_API ndfb_status ndfb_effective_brdf_reference(ndfb_context ctx, ndfb_normal
         for (size_t i = 0; i < direction_count; ++i)
             dirs[i] = normalize_or({directions[3 * i], directions[3 * i + 1], directions[3 * i + 2]}, {0, 0, 1});
         std::vector<WeightedNormal> samples;
-        gather_footprint(m, int(level), int(x), int(y), to_wrap(wrap), samples);
-        reference_effective_brdf(samples, to_brdf(brdf, brdf_parameter), dirs, std::span(values, direction_count));
+        gather_footprint(m, int(level), int(x), int(y), to_wrap(raw(wrap)), samples);
+        reference_effective_brdf(samples, to_brdf(raw(brdf), brdf_parameter), dirs, std::span(values, direction_count));
     });
 }
 
@@ -368,13 +410,13 @@ NDFB_API ndfb_status ndfb_texel_error(ndfb_context ctx, ndfb_normal_map map, ndf
         require(level < uint32_t(level_count(m.width, m.height)), "level " + std::to_string(level) + " does not exist");
         const LevelSize size = level_size(m.width, m.height, int(level));
         require(x < uint32_t(size.width) && y < uint32_t(size.height), "texel outside the level");
-        const BaseBrdf base = to_brdf(brdf, brdf_parameter);
+        const BaseBrdf base = to_brdf(raw(brdf), brdf_parameter);
         std::vector<WeightedNormal> samples;
-        gather_footprint(m, int(level), int(x), int(y), to_wrap(wrap), samples);
+        gather_footprint(m, int(level), int(x), int(y), to_wrap(raw(wrap)), samples);
         const std::vector<Vec3> directions = fibonacci_hemisphere(error_direction_count(base));
         const TexelErrorMeter meter(samples, base, directions);
         std::vector<VmfLobe> lobes;
-        switch (representation) {
+        switch (raw(representation)) {
         case NDFB_REPR_VMF_MIXTURE: {
             const LobePyramid& pyramid = pyramid_of(p);
             require(pyramid.source.width == m.width && pyramid.source.height == m.height,

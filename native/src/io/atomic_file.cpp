@@ -91,8 +91,11 @@ void ensure_writable_directory(const std::string& dir)
     if (!fs::is_directory(folder, ec))
         throw_not_writable(dir, "not a directory");
 
-    // Permission bits alone do not answer this (ACLs, read-only mounts, root): try it.
-    const fs::path probe = folder / (".ndfbake-write-probe-" + std::to_string(::getpid()));
+    // Permission bits alone do not answer this (ACLs, read-only mounts, root): try it. The name
+    // is unique per call, so two bakes into one folder from two threads do not collide on it.
+    static std::atomic<uint64_t> probes{0};
+    const fs::path probe = folder / (".ndfbake-write-probe-" + std::to_string(::getpid()) + "-" +
+                                     std::to_string(probes++));
     const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
     if (fd < 0)
         throw_not_writable(dir, std::strerror(errno));

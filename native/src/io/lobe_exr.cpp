@@ -1,5 +1,8 @@
 #include "io/lobe_exr.h"
 
+#include <cerrno>
+#include <cstring>
+
 #include <OpenImageIO/imageio.h>
 
 #include "error.h"
@@ -28,6 +31,18 @@ OIIO::ImageSpec exr_spec(int width, int height, PixelPrecision precision,
     throw Error(Status::io_error, "cannot write '" + path + "': " + detail);
 }
 
+// OpenEXR reports a failed write as "File output failed." without the reason; the errno of the
+// write is still set when OpenImageIO returns. Only errors a write can raise are named, so a stale
+// errno from an earlier, unrelated call is never blamed.
+std::string write_errno_reason(int error)
+{
+    switch (error) {
+    case ENOSPC: case EFBIG: case EDQUOT: case EIO: case EROFS: case EACCES: case EPERM:
+        return std::string(" (") + std::strerror(error) + ")";
+    default: return {};
+    }
+}
+
 }  // namespace
 
 void write_rgba_exr(const std::string& path, int width, int height, const float* rgba,
@@ -43,9 +58,12 @@ void write_rgba_exr(const std::string& path, int width, int height, const float*
         std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create("openexr");
         if (!out)
             throw_write_error(path, OIIO::geterror());
+        errno = 0;
         if (!out->open(temp_path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, rgba) ||
-            !out->close())
-            throw_write_error(path, out->geterror());
+            !out->close()) {
+            const int error = errno;
+            throw_write_error(path, out->geterror() + write_errno_reason(error));
+        }
     });
 }
 

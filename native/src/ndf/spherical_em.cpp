@@ -60,6 +60,12 @@ struct SampleBlocks {
     std::vector<float> x, y, z, w;
     explicit SampleBlocks(std::span<const WeightedNormal> samples)
     {
+        // Exact sizes: a top-level footprint is the whole map, and growth by doubling would hold
+        // up to twice its memory (bake/memory_budget.cpp counts 16 bytes per sample).
+        x.reserve(samples.size());
+        y.reserve(samples.size());
+        z.reserve(samples.size());
+        w.reserve(samples.size());
         for (const WeightedNormal& s : samples) {
             x.push_back(s.n.x);
             y.push_back(s.n.y);

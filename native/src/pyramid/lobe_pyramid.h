@@ -41,6 +41,8 @@ struct PyramidSettings {
     // fine normals per texel (subsample_footprint). Reported errors use the full problem.
     int budget_directions = 256;
     int budget_sample_cap = 256;
+    // The most memory a fit or bake may use (bake/memory_budget.h); 0: physical memory.
+    uint64_t max_memory_bytes = 0;
 };
 
 struct LobeLevel {
