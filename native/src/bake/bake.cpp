@@ -277,9 +277,9 @@ std::string color_file_name(int level, int lobe)
     return buffer;
 }
 
-BakeOutcome write_pyramid(const LobePyramid& pyramid, const DecodeResult& decoded, const std::string& out_dir,
-                          const PyramidSettings& settings, const WriteSettings& write, BakeTimings timings,
-                          const StageProgress& progress)
+BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& decoded, const std::string& out_dir,
+                               const PyramidSettings& settings, const WriteSettings& write, BakeTimings timings,
+                               const StageProgress& progress)
 {
     ensure_writable_directory(out_dir);
 
@@ -360,8 +360,8 @@ BakeOutcome write_pyramid(const LobePyramid& pyramid, const DecodeResult& decode
     return outcome;
 }
 
-BakeOutcome bake_file(const std::string& input_path, const std::string& out_dir, const DecodeOptions& decode,
-                      const PyramidSettings& settings, const WriteSettings& write, const StageProgress& progress)
+BakeOutcome bake_file_into(const std::string& input_path, const std::string& out_dir, const DecodeOptions& decode,
+                           const PyramidSettings& settings, const WriteSettings& write, const StageProgress& progress)
 {
     // Fail on an unwritable output before spending minutes on the fit.
     ensure_writable_directory(out_dir);
@@ -395,7 +395,39 @@ BakeOutcome bake_file(const std::string& input_path, const std::string& out_dir,
 
     WriteSettings named = write;
     if (named.source_name.empty()) named.source_name = fs::path(input_path).filename().string();
-    return write_pyramid(pyramid, decoded, out_dir, settings, named, timings, progress);
+    return write_pyramid_into(pyramid, decoded, out_dir, settings, named, timings, progress);
+}
+
+// Runs `body`; if it fails and out_dir did not exist before, removes the (then empty) folder that
+// ensure_writable_directory created, so that a failed bake leaves nothing behind at all.
+template <typename Body>
+BakeOutcome removing_new_folder_on_failure(const std::string& out_dir, Body&& body)
+{
+    std::error_code ec;
+    const bool existed = fs::exists(out_dir, ec);
+    try {
+        return body();
+    } catch (...) {
+        if (!existed) fs::remove(out_dir, ec);  // removes only an empty folder
+        throw;
+    }
+}
+
+BakeOutcome write_pyramid(const LobePyramid& pyramid, const DecodeResult& decoded, const std::string& out_dir,
+                          const PyramidSettings& settings, const WriteSettings& write, BakeTimings timings,
+                          const StageProgress& progress)
+{
+    return removing_new_folder_on_failure(out_dir, [&] {
+        return write_pyramid_into(pyramid, decoded, out_dir, settings, write, timings, progress);
+    });
+}
+
+BakeOutcome bake_file(const std::string& input_path, const std::string& out_dir, const DecodeOptions& decode,
+                      const PyramidSettings& settings, const WriteSettings& write, const StageProgress& progress)
+{
+    return removing_new_folder_on_failure(out_dir, [&] {
+        return bake_file_into(input_path, out_dir, decode, settings, write, progress);
+    });
 }
 
 }  // namespace ndfbake
