@@ -126,7 +126,11 @@ typedef struct ndfb_level_stats {
 
 /* ---- library and context ------------------------------------------------------------------ */
 NDFB_API const char* ndfb_version(void);
-NDFB_API uint32_t ndfb_abi_version(void);  /* bumped on any incompatible change of this header */
+/* The library's NDFB_ABI_VERSION. A program compares it with the NDFB_ABI_VERSION it was compiled
+ * with before anything else: the *_init functions write the option structs as this header lays
+ * them out, so a program built against another layout must not call them. */
+#define NDFB_ABI_VERSION 1
+NDFB_API uint32_t ndfb_abi_version(void);
 NDFB_API ndfb_status ndfb_context_create(ndfb_context* out);
 NDFB_API void ndfb_context_destroy(ndfb_context ctx);
 /* The message of the last failed call on ctx ("" if none). Valid until the next call on ctx.

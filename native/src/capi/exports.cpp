@@ -33,7 +33,6 @@ namespace {
 
 using namespace ndfbake;
 
-constexpr uint32_t kAbiVersion = 1;
 thread_local std::string g_create_error;
 
 void require(bool condition, const std::string& message)
@@ -164,7 +163,7 @@ void require_level(const LobePyramid& p, uint32_t level)
 extern "C" {
 
 NDFB_API const char* ndfb_version(void) { return NDFBAKE_VERSION_STRING; }
-NDFB_API uint32_t ndfb_abi_version(void) { return kAbiVersion; }
+NDFB_API uint32_t ndfb_abi_version(void) { return NDFB_ABI_VERSION; }
 
 NDFB_API ndfb_status ndfb_context_create(ndfb_context* out)
 {
