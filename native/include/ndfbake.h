@@ -9,8 +9,8 @@
  *   passed with explicit element counts; a count that does not match is NDFB_ERROR_INVALID_ARGUMENT.
  * - Normals are unit float3 in tangent space, +Z out of the surface, OpenGL convention (+Y up V),
  *   rows top to bottom as stored in image files.
- * - Option structs start with struct_size; fill them with the matching *_init function first, so
- *   that a program built against an older header keeps working with a newer library.
+ * - Option structs start with struct_size, from which the library reads only the fields the caller
+ *   has; fill them with the matching *_init function first (and see NDFB_ABI_VERSION).
  * - A context may be used by one thread at a time; separate contexts are independent.
  */
 #ifndef NDFBAKE_H
