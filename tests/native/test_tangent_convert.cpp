@@ -4,6 +4,7 @@
 // own node is checked inside Blender by tests/blender/test_normal_roundtrip.py.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -175,6 +176,21 @@ TEST_F(TangentConvert, PaddingGrowsIslandsRingByRingAndRowsRunTopToBottom)
     ASSERT_GE(ring1, 0);
     const Vec3 inside = texel(out, w, 4, 8);
     EXPECT_LT(length(texel(out, w, ring1 % w, ring1 / w) - normalize_or(inside, kUp)), 1e-6f);
+}
+
+TEST_F(TangentConvert, UVsFarOutsideTheImageCoverNothingAndFinishAtOnce)
+{
+    // Found by fuzz_tangent: a UV of 1e10 put the raster bounds out of int's range (undefined
+    // behaviour, then a 2^31-texel loop per row). It must cover no texel and return at once.
+    TestMesh m;
+    const uint32_t a = m.vertex({0, 0, 0}), b = m.vertex({1, 0, 0}), c = m.vertex({0, 1, 0});
+    m.face({a, b, c}, {{1e10f, 0.0f}, {1e10f + 1e4f, 0.0f}, {-1e11f, 1e10f}}, {kUp, kUp, kUp});
+    const std::vector<float> in(8 * 8 * 3, 0.5f);
+    std::vector<uint8_t> coverage;
+    const auto start = std::chrono::steady_clock::now();
+    convert(m, in, 8, 8, true, 0, &coverage);
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 1.0);
+    for (uint8_t covered : coverage) EXPECT_EQ(covered, 0);
 }
 
 }  // namespace

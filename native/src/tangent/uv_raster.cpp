@@ -49,10 +49,12 @@ void rasterize_uv(const MeshInput& mesh, const std::vector<RenderTriangle>& tria
         }
         s.area = (s.x[1] - s.x[0]) * (s.y[2] - s.y[0]) - (s.y[1] - s.y[0]) * (s.x[2] - s.x[0]);
         // Bounds of the texel centres inside the box, clipped to the image (empty when outside).
-        s.x0 = int(std::max(0.0, std::ceil(minx - 0.5)));
-        s.x1 = int(std::min(double(width - 1), std::floor(maxx - 0.5)));
-        s.y0 = int(std::max(0.0, std::ceil(miny - 0.5)));
-        s.y1 = int(std::min(double(height - 1), std::floor(maxy - 0.5)));
+        // Clamped on both sides in double before converting: a UV far outside [0, 1] (1e10) is out
+        // of int's range, and converting it would be undefined (found by fuzz_tangent).
+        s.x0 = int(std::clamp(std::ceil(minx - 0.5), 0.0, double(width)));
+        s.x1 = int(std::clamp(std::floor(maxx - 0.5), -1.0, double(width - 1)));
+        s.y0 = int(std::clamp(std::ceil(miny - 0.5), 0.0, double(height)));
+        s.y1 = int(std::clamp(std::floor(maxy - 0.5), -1.0, double(height - 1)));
         if (s.area == 0.0) s.x1 = -1;  // no UV area: covers nothing
     }
     // Bands of rows; every band walks the triangle list in order, so the first triangle wins.
