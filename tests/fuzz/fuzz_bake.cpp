@@ -9,6 +9,8 @@
 #include <fuzzer/FuzzedDataProvider.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -174,7 +176,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
             status = ndfb_texel_error(ctx, map, pyramid, NDFB_REPR_VMF_MIXTURE, fit.wrap, level, 0, 0, fit.brdf,
                                       fit.brdf_parameter, &error);
             check(status, "ndfb_texel_error");
-            if (status == NDFB_OK) require(std::isfinite(error) && error >= 0.0f, "texel error finite");
+            if (status == NDFB_OK && !(std::isfinite(error) && error >= 0.0f)) {
+                std::fprintf(stderr, "texel error %g: %ux%u, %u channels, brdf %u parameter %g, level %u, J %u\n",
+                             error, width, height, channels, brdf, fit.brdf_parameter, level, fit.max_lobes);
+                std::fprintf(stderr, "tolerance %g align %d strength %g iterations %u method %u wrap %u threads %u\n",
+                             fit.tolerance, fit.align, fit.alignment_strength, fit.max_iterations,
+                             unsigned(fit.method), wrap, fit.threads);
+                if (const char* dump = std::getenv("NDFB_FUZZ_DUMP")) ndfb_normal_map_save(ctx, map, dump);
+                require(false, "texel error finite");
+            }
             if (write_files) {
                 status = ndfb_pyramid_write(ctx, pyramid, map, out.c_str(), &fit, &write);
                 check(status, "ndfb_pyramid_write");

@@ -5,8 +5,8 @@
 //
 // Read-only and full folders are simulated in a forked child so the test process is untouched:
 // - read-only: a tmpfs mounted read-only in a private mount namespace (EROFS) where the sandbox
-//   allows mount(2), and a folder without write permission entered as user `nobody` when running
-//   as root (root ignores permission bits), or directly otherwise (EACCES);
+//   allows mount(2), and a folder without write permission (EACCES), as root without
+//   CAP_DAC_OVERRIDE (root ignores permission bits);
 // - full: RLIMIT_FSIZE makes every write past the limit fail with EFBIG, exactly as a full disk
 //   fails a write (portable, needs no privilege); and a small tmpfs (ENOSPC) where mount(2) works.
 #include <gtest/gtest.h>
@@ -14,16 +14,20 @@
 #include <fcntl.h>
 #include <sched.h>
 #include <signal.h>
+#include <linux/capability.h>
 #include <sys/mount.h>
+#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cfloat>
 #include <cstdlib>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <functional>
@@ -155,7 +159,9 @@ constexpr int kSkipped = -2;
 // it inherits no threads: a forked copy of a process whose OpenEXR thread pool is running would
 // hang on its first EXR. It bakes `earlier` (if any) into `out` first, then `input`, and reports
 // the second bake's status and message, flagging any change the failed bake made to the folder.
-ChildReport bake_in_child(const std::function<std::string()>& setup, const std::string& input,
+// `setup` runs between fork and exec, so it allocates nothing: it returns null, or the name of the
+// step that failed (errno tells why), which makes the child report kSkipped.
+ChildReport bake_in_child(const std::function<const char*()>& setup, const std::string& input,
                           const std::string& out, const std::string& earlier = {})
 {
     int fds[2];
@@ -174,10 +180,10 @@ ChildReport bake_in_child(const std::function<std::string()>& setup, const std::
     const pid_t pid = ::fork();
     if (pid == 0) {
         ::close(fds[0]);
-        const std::string skip = setup();
-        if (!skip.empty()) {
-            const std::string payload = std::to_string(kSkipped) + "\n" + skip;
-            ssize_t written = ::write(fds[1], payload.data(), payload.size());
+        if (const char* failed = setup()) {
+            char payload[256];
+            const int n = std::snprintf(payload, sizeof payload, "%d\n%s: %s", kSkipped, failed, std::strerror(errno));
+            ssize_t written = ::write(fds[1], payload, size_t(std::max(0, std::min(n, int(sizeof payload) - 1))));
             (void)written;
             ::_exit(0);
         }
@@ -231,15 +237,14 @@ TEST(HostileChild, DISABLED_Bake)
     ndfb_context_destroy(ctx);
 }
 
-// In the child: a private mount namespace with a tmpfs at `dir`; the reason where mount is not
-// allowed (no CAP_SYS_ADMIN, a container that forbids it).
-std::string mount_private_tmpfs(const std::string& dir, const char* options, unsigned long flags)
+// In the child: a private mount namespace with a tmpfs at `dir`; the failed step where mount is
+// not allowed (no CAP_SYS_ADMIN, a container that forbids it).
+const char* mount_private_tmpfs(const std::string& dir, const char* options, unsigned long flags)
 {
-    if (::unshare(CLONE_NEWNS) != 0) return std::string("unshare(CLONE_NEWNS): ") + std::strerror(errno);
-    if (::mount("none", "/", nullptr, MS_REC | MS_PRIVATE, nullptr) != 0 ||
-        ::mount("ndfbake-test", dir.c_str(), "tmpfs", flags, options) != 0)
-        return std::string("mount tmpfs: ") + std::strerror(errno);
-    return {};
+    if (::unshare(CLONE_NEWNS) != 0) return "unshare(CLONE_NEWNS)";
+    if (::mount("none", "/", nullptr, MS_REC | MS_PRIVATE, nullptr) != 0) return "mount --make-rprivate /";
+    if (::mount("ndfbake-test", dir.c_str(), "tmpfs", flags, options) != 0) return "mount tmpfs";
+    return nullptr;
 }
 
 // ---- the fixture -----------------------------------------------------------------------------
@@ -466,6 +471,58 @@ TEST_F(HostileInputs, ExrWithNanInfNegativeAndHugeValuesIsRepairedAndCounted)
     }
 }
 
+TEST_F(HostileInputs, HorizonNormalsGiveFiniteErrorsUnderEveryBrdf)
+{
+    // Found by fuzz_bake (corpus/bake/beckmann_horizon_nan): a 13 x 16 map of +Z with texels on
+    // the horizon (as the repair leaves x = +-1 texels) gave lobes whose Beckmann-convolved
+    // distribution was evaluated just above the horizon, where exp() and c^4 both underflow:
+    // 0/0 = NaN in the texel errors, the lobe budget and report.json.
+    std::vector<float> pixels(13 * 16 * 3, 0.0f);
+    for (size_t i = 2; i < pixels.size(); i += 3) pixels[i] = 1.0f;
+    const struct {
+        int texel;
+        float x, y;
+    } horizon[] = {{15, 1, 0},   {29, 6.47306442e-05f, 1}, {37, 0, -1},  {44, 1, 0},   {52, 0, -1},  {59, 1, 0},
+                   {60, 0, -1},  {66, 1, 0},   {67, -1, 0},  {74, 0, 1},   {81, 1, 0},   {82, -1, 0},  {104, 1, 0},
+                   {118, 6.47306442e-05f, 1}, {126, 0, -1}, {133, 1, 0},  {141, 0, -1}, {148, 1, 0},  {149, 0, -1},
+                   {155, 1, 0},  {156, -1, 0}, {163, 0, 1},  {170, 1, 0},  {171, -1, 0}, {193, 1, 0},
+                   {207, 6.47306442e-05f, 1}};
+    for (const auto& h : horizon) {
+        pixels[size_t(h.texel) * 3 + 0] = h.x;
+        pixels[size_t(h.texel) * 3 + 1] = h.y;
+        pixels[size_t(h.texel) * 3 + 2] = 0.0f;
+    }
+    ndfb_normal_map map = nullptr;
+    ASSERT_EQ(ndfb_normal_map_from_pixels(ctx_, pixels.data(), pixels.size(), 13, 16, 3, 1, &decode_, &map), NDFB_OK);
+    const struct {
+        ndfb_brdf brdf;
+        float parameter;
+    } brdfs[] = {{NDFB_BRDF_BECKMANN, 1.0f}, {NDFB_BRDF_BECKMANN, 0.0001f}, {NDFB_BRDF_GGX, 1.0f},
+                 {NDFB_BRDF_GGX, 0.01f}, {NDFB_BRDF_BLINN_PHONG, 1.0f}, {NDFB_BRDF_BLINN_PHONG, 10000.0f},
+                 {NDFB_BRDF_LAMBERT, 0.0f}};
+    for (const auto& b : brdfs) {
+        fit_.brdf = b.brdf;
+        fit_.brdf_parameter = b.parameter;
+        fit_.max_lobes = 8;
+        fit_.max_iterations = 16;
+        ndfb_pyramid pyramid = nullptr;
+        ASSERT_EQ(ndfb_fit(ctx_, map, &fit_, &pyramid), NDFB_OK) << error();
+        for (uint32_t level = 1; level < ndfb_pyramid_level_count(pyramid); ++level) {
+            float value = -1.0f;
+            ASSERT_EQ(ndfb_texel_error(ctx_, map, pyramid, NDFB_REPR_VMF_MIXTURE, NDFB_WRAP_REPEAT, level, 0, 0,
+                                       b.brdf, b.parameter, &value),
+                      NDFB_OK);
+            EXPECT_TRUE(std::isfinite(value) && value >= 0.0f) << int(b.brdf) << " " << b.parameter << " level "
+                                                               << level << ": " << value;
+            ndfb_level_stats stats;
+            ASSERT_EQ(ndfb_pyramid_level_stats(ctx_, pyramid, level, b.brdf, b.parameter, 0, &stats), NDFB_OK);
+            EXPECT_TRUE(std::isfinite(stats.mean_error) && std::isfinite(stats.p95_error)) << level;
+        }
+        ndfb_pyramid_destroy(pyramid);
+    }
+    ndfb_normal_map_destroy(map);
+}
+
 TEST_F(HostileInputs, OneOrFiveAndMoreChannelsAreUnsupported)
 {
     write_image(path("grey.png"), 8, 8, 1, OIIO::TypeDesc::UINT8, std::vector<float>(64, 0.5f));
@@ -547,14 +604,21 @@ TEST_F(HostileInputs, AReadOnlyOutputFolderIsAnIoErrorAndNothingIsWritten)
     const std::string locked = path("locked");
     fs::create_directories(locked);
 
-    // Permission bits: as `nobody` when we are root (root would pass them).
+    // Permission bits (EACCES). Root passes them through CAP_DAC_OVERRIDE, so as root the child
+    // drops that capability from its bounding set (kept across exec, and the test binary stays
+    // reachable whatever the permissions of the folders above it); without CAP_SETPCAP it becomes
+    // user nobody instead.
     ::chmod(locked.c_str(), 0555);
     const bool root = ::geteuid() == 0;
     ChildReport r = bake_in_child(
-        [root]() -> std::string {
-            if (root && (::setgid(65534) != 0 || ::setuid(65534) != 0))
-                return std::string("cannot become nobody: ") + std::strerror(errno);
-            return {};
+        [root]() -> const char* {
+            if (!root) return nullptr;
+            if (::prctl(PR_CAPBSET_DROP, CAP_DAC_OVERRIDE, 0, 0, 0) == 0 &&
+                ::prctl(PR_CAPBSET_DROP, CAP_DAC_READ_SEARCH, 0, 0, 0) == 0 &&
+                ::prctl(PR_CAPBSET_DROP, CAP_FOWNER, 0, 0, 0) == 0)
+                return nullptr;
+            if (::setgid(65534) != 0 || ::setuid(65534) != 0) return "drop CAP_DAC_OVERRIDE or become user nobody";
+            return nullptr;
         },
         input, locked + "/out");
     ::chmod(locked.c_str(), 0755);
@@ -589,11 +653,10 @@ TEST_F(HostileInputs, AFullOutputFolderIsAnIoErrorAndKeepsTheEarlierBake)
     // returns the error instead of killing the process).
     const std::string out = path("out");
     ChildReport r = bake_in_child(
-        []() -> std::string {
+        []() -> const char* {
             ::signal(SIGXFSZ, SIG_IGN);
             const struct rlimit limit {16 * 1024, 16 * 1024};
-            if (::setrlimit(RLIMIT_FSIZE, &limit) != 0) return std::string("setrlimit: ") + std::strerror(errno);
-            return {};
+            return ::setrlimit(RLIMIT_FSIZE, &limit) != 0 ? "setrlimit(RLIMIT_FSIZE)" : nullptr;
         },
         large, out, small);
     EXPECT_EQ(r.status, NDFB_ERROR_IO) << r.message;

@@ -55,7 +55,10 @@ float beckmann_distribution(float c, float m)
     if (c <= 0.0f) return 0.0f;
     const float c2 = c * c, m2 = m * m;
     const float tan2 = (1.0f - c2) / c2;
-    return std::exp(-tan2 / m2) * kInvPi / (m2 * c2 * c2);
+    // Near the horizon the exponential underflows to 0 while c^4 does too: 0/0. D -> 0 there.
+    const float falloff = std::exp(-tan2 / m2);
+    if (falloff == 0.0f) return 0.0f;
+    return falloff * kInvPi / (m2 * c2 * c2);
 }
 
 }  // namespace
