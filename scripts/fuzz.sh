@@ -57,6 +57,11 @@ export ASAN_OPTIONS="fast_unwind_on_malloc=0:detect_leaks=1:${ASAN_OPTIONS:-}"
 export LSAN_OPTIONS="suppressions=$root/tests/lsan.supp:print_suppressions=0:${LSAN_OPTIONS:-}"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:${UBSAN_OPTIONS:-}"
 
+# The files the targets write per input go to a scratch folder of this run, removed at the end.
+scratch=$(mktemp -d /dev/shm/ndfbake-fuzz.XXXXXX 2>/dev/null || mktemp -d)
+trap 'rm -rf "$scratch"' EXIT
+export NDFBAKE_FUZZ_SCRATCH="$scratch"
+
 fuzzer="$build/tests/fuzz/fuzz_$target"
 echo "fuzz.sh: $target for ${seconds}s (seeds: tests/fuzz/corpus/$target, $(ls "$seeds" | wc -l) files)"
 status=0

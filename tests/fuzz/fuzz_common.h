@@ -27,13 +27,17 @@ inline ndfb_context context()
     return ctx;
 }
 
-// A folder of this process's own (several fuzzing jobs may share a machine); /dev/shm when it
-// exists, so the files written per input cost no disk I/O.
+// A folder of this process's own (several fuzzing jobs may share a machine), inside
+// $NDFBAKE_FUZZ_SCRATCH (scripts/fuzz.sh makes one and removes it afterwards: libFuzzer ends a
+// timed run with _Exit, so atexit handlers do not run), else in /dev/shm when it exists, so the
+// files written per input cost no disk I/O.
 inline const std::string& scratch_dir()
 {
     // Never destroyed: the atexit handler that removes the folder runs after static destructors.
     static const std::string* dir = [] {
-        const char* base = std::filesystem::is_directory("/dev/shm") ? "/dev/shm" : P_tmpdir;
+        const char* scratch = std::getenv("NDFBAKE_FUZZ_SCRATCH");
+        const char* base = scratch && *scratch ? scratch
+                           : std::filesystem::is_directory("/dev/shm") ? "/dev/shm" : P_tmpdir;
         auto* pattern = new std::string(std::string(base) + "/ndfbake-fuzz-XXXXXX");
         if (!::mkdtemp(pattern->data())) std::abort();
         std::atexit([] {
