@@ -22,32 +22,7 @@
 namespace ndfbake {
 namespace {
 
-class BakeApi : public testing_support::TempDirTest {
-protected:
-    void SetUp() override
-    {
-        TempDirTest::SetUp();
-        ASSERT_EQ(ndfb_context_create(&ctx_), NDFB_OK);
-        ndfb_decode_options_init(&decode_);
-        ndfb_fit_options_init(&fit_);
-        ndfb_write_options_init(&write_);
-    }
-    void TearDown() override
-    {
-        ndfb_context_destroy(ctx_);
-        TempDirTest::TearDown();
-    }
-    std::string synth_file(Pattern pattern, int w, int h, const std::string& name)
-    {
-        write_normal_map(path(name), synthesize(pattern, w, h));
-        return path(name);
-    }
-
-    ndfb_context ctx_ = nullptr;
-    ndfb_decode_options decode_;
-    ndfb_fit_options fit_;
-    ndfb_write_options write_;
-};
+class BakeApi : public testing_support::CApiTest {};
 
 TEST_F(BakeApi, WritesSelfDescribingLobeTexturesAndAReport)
 {

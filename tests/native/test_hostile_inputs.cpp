@@ -249,28 +249,18 @@ const char* mount_private_tmpfs(const std::string& dir, const char* options, uns
 
 // ---- the fixture -----------------------------------------------------------------------------
 
-class HostileInputs : public testing_support::TempDirTest {
+class HostileInputs : public testing_support::CApiTest {
 protected:
     void SetUp() override
     {
-        TempDirTest::SetUp();
-        ASSERT_EQ(ndfb_context_create(&ctx_), NDFB_OK);
-        ndfb_decode_options_init(&decode_);
-        ndfb_fit_options_init(&fit_);
-        ndfb_write_options_init(&write_);
+        CApiTest::SetUp();
         fit_.max_lobes = 2;
         fit_.threads = 2;
-    }
-    void TearDown() override
-    {
-        ndfb_context_destroy(ctx_);
-        TempDirTest::TearDown();
     }
 
     std::string synth_png(const std::string& name, int size, Pattern pattern = Pattern::fbm)
     {
-        write_normal_map(path(name), synthesize(pattern, size, size));
-        return path(name);
+        return synth_file(pattern, size, size, name);
     }
 
     std::string error() const { return ndfb_last_error(ctx_); }
@@ -305,10 +295,6 @@ protected:
         EXPECT_EQ(map, nullptr) << what;
     }
 
-    ndfb_context ctx_ = nullptr;
-    ndfb_decode_options decode_;
-    ndfb_fit_options fit_;
-    ndfb_write_options write_;
     int bakes_ = 0;
 };
 

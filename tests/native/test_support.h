@@ -9,6 +9,10 @@
 #include <set>
 #include <string>
 
+#include "io/normal_encode.h"
+#include "ndfbake.h"
+#include "synth/patterns.h"
+
 namespace ndfbake::testing_support {
 
 class TempDirTest : public ::testing::Test {
@@ -34,6 +38,35 @@ protected:
     }
 
     std::filesystem::path dir_;
+};
+
+// A C API context and default option structs, in a fresh temporary folder.
+class CApiTest : public TempDirTest {
+protected:
+    void SetUp() override
+    {
+        TempDirTest::SetUp();
+        ASSERT_EQ(ndfb_context_create(&ctx_), NDFB_OK);
+        ndfb_decode_options_init(&decode_);
+        ndfb_fit_options_init(&fit_);
+        ndfb_write_options_init(&write_);
+    }
+    void TearDown() override
+    {
+        ndfb_context_destroy(ctx_);
+        TempDirTest::TearDown();
+    }
+    // A synthetic normal map written as an image file in the folder.
+    std::string synth_file(Pattern pattern, int w, int h, const std::string& name)
+    {
+        write_normal_map(path(name), synthesize(pattern, w, h));
+        return path(name);
+    }
+
+    ndfb_context ctx_ = nullptr;
+    ndfb_decode_options decode_;
+    ndfb_fit_options fit_;
+    ndfb_write_options write_;
 };
 
 }  // namespace ndfbake::testing_support
