@@ -74,6 +74,8 @@ class FitOptions(ctypes.Structure):
         ("threads", ctypes.c_uint32),
         ("progress", PROGRESS_FN),
         ("progress_user", ctypes.c_void_p),
+        ("max_memory_bytes", ctypes.c_uint64),
+        ("max_levels", ctypes.c_uint32),
     ]
 
 
@@ -254,7 +256,8 @@ class Context:
             raise Error(status, self.lib.status_name(status), message.decode(errors="replace"))
 
     def bake(self, input_path, out_dir, *, max_lobes=4, tolerance=0.0, roughness=0.5, wrap=WRAP_REPEAT,
-             threads=0, srgb=SRGB_AS_DATA, convention=CONVENTION_OPENGL, progress=None, source_name=None):
+             threads=0, srgb=SRGB_AS_DATA, convention=CONVENTION_OPENGL, progress=None, source_name=None,
+             max_levels=0):
         """ndfb_bake with a GGX base BRDF of Blender roughness `roughness`.
 
         progress(stage, fraction) -> bool: return True to cancel. Exceptions inside it cancel too.
@@ -270,6 +273,7 @@ class Context:
         fit.brdf_parameter = float(roughness)
         fit.wrap = wrap
         fit.threads = int(threads)
+        fit.max_levels = int(max_levels)
         callback = None
         if progress is not None:
             def trampoline(_user, stage, fraction):

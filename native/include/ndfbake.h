@@ -103,6 +103,10 @@ typedef struct ndfb_fit_options {
        limit in the message. 0 (default): the machine's physical memory. report.json records the
        estimate and the process's measured peak ("peak_memory_bytes"). */
     uint64_t max_memory_bytes;
+    /* Levels to fit and write, from level 0 up (1: level 0 only); 0 (default): every level down
+       to 1x1. A scene whose cameras never see the map smaller than 2^(n-1) texels per pixel needs
+       n levels, and the fit of each level costs about as much as any other. */
+    uint32_t max_levels;
 } ndfb_fit_options;
 
 typedef struct ndfb_write_options {

@@ -38,6 +38,7 @@ bake options:
   --srgb P             data (default: an sRGB tag is ignored, values are the normal) or linearize
   --color FILE         base-colour image of the same size: also write per-lobe colour EXRs
   --precision P        half (default) or float EXR pixels
+  --levels N           fit and write levels 0..N-1 only (default 0: every level down to 1x1)
   --method M           per-level (default: every level from its fine normals) or hierarchical
                        (every level from the level below's lobes: faster, less accurate)
   --iterations N       EM iterations per texel at most (default 20)
@@ -188,6 +189,7 @@ int run_bake(ndfb_context ctx, const Args& args)
         else if (name == "--max-lobes" && numeric && number >= 0 && number == double(int(number))) fit.max_lobes = uint32_t(number);
         else if (name == "--tolerance" && numeric) fit.tolerance = float(number);
         else if (name == "--threads" && numeric && number >= 0) fit.threads = uint32_t(number);
+        else if (name == "--levels" && numeric && number >= 0 && number == double(int(number))) fit.max_levels = uint32_t(number);
         else if (name == "--brdf" && parse_brdf(value, fit)) {}
         else if (name == "--convention" && (value == "opengl" || value == "directx"))
             decode.convention = value == "opengl" ? NDFB_CONVENTION_OPENGL : NDFB_CONVENTION_DIRECTX;

@@ -55,6 +55,39 @@ TEST_F(BakeApi, WritesSelfDescribingLobeTexturesAndAReport)
     for (const std::string& entry : listing(out)) EXPECT_EQ(entry.find(".ndfbake"), std::string::npos) << entry;
 }
 
+TEST_F(BakeApi, MaxLevelsFitsAndWritesOnlyTheLevelsAsked)
+{
+    const std::string input = synth_file(Pattern::fbm, 32, 32, "fbm.png");
+    const std::string all = path("all"), three = path("three");
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), all.c_str(), &decode_, &fit_, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+    fit_.max_levels = 3;
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), three.c_str(), &decode_, &fit_, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+    // report.json and 3 levels × 4 lobes; the full bake has 6 levels (32² → 1²).
+    EXPECT_EQ(listing(three).size(), 1u + 3u * 4u);
+    EXPECT_EQ(listing(all).size(), 1u + 6u * 4u);
+    // Levels 1 and 2 are fitted alike (alignment may order the slots differently): same texel sums.
+    for (int level = 1; level < 3; ++level) {
+        std::vector<float> sum_all, sum_three;
+        for (int lobe = 0; lobe < 4; ++lobe) {
+            char file[32];
+            std::snprintf(file, sizeof file, "/level%02d_lobe%d.exr", level, lobe);
+            int w = 0, h = 0;
+            const std::vector<float> a = read_rgba_exr(all + file, w, h), b = read_rgba_exr(three + file, w, h);
+            sum_all.resize(a.size());
+            sum_three.resize(b.size());
+            for (size_t i = 0; i < a.size(); i += 4) sum_all[i] += a[i];  // Σ α = 1 per texel in both
+            for (size_t i = 0; i < b.size(); i += 4) sum_three[i] += b[i];
+        }
+        for (size_t i = 0; i < sum_all.size(); i += 4) EXPECT_NEAR(sum_all[i], sum_three[i], 2e-3f);
+    }
+    char file[32];
+    std::snprintf(file, sizeof file, "/level%02d_lobe0.exr", 3);
+    EXPECT_FALSE(std::filesystem::exists(three + file));
+    fit_.max_levels = 65;
+    EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("bad").c_str(), &decode_, &fit_, &write_), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(ndfb_last_error(ctx_)).find("max_levels"), std::string::npos);
+}
+
 TEST_F(BakeApi, DirectXInputBakesExactlyLikeItsOpenGLTwin)
 {
     NormalMap map = synthesize(Pattern::fbm, 16, 16);

@@ -46,7 +46,7 @@ MemoryEstimate estimate_bake_memory(int width, int height, const SourceLayout& s
     const uint64_t per_sample =
         sizeof(WeightedNormal) + 4 * sizeof(float) + (settings.fit.tolerance > 0.0f ? sizeof(WeightedNormal) : 0);
     uint64_t working = 0;
-    const int levels = level_count(width, height);
+    const int levels = pyramid_level_count(width, height, settings);
     for (int l = 0; l < levels; ++l) {
         const LevelSize size = level_size(width, height, l);
         const uint64_t texels = uint64_t(size.width) * uint64_t(size.height);

@@ -121,6 +121,10 @@ PyramidSettings to_pyramid(const ndfb_fit_options* o)
     // Added after ABI 1's first release: read only from callers whose struct has it.
     if (o->struct_size >= offsetof(ndfb_fit_options, max_memory_bytes) + sizeof(o->max_memory_bytes))
         s.max_memory_bytes = o->max_memory_bytes;
+    if (o->struct_size >= offsetof(ndfb_fit_options, max_levels) + sizeof(o->max_levels)) {
+        require(o->max_levels <= 64, "max_levels must be at most 64 (0: every level), got " + std::to_string(o->max_levels));
+        s.max_levels = int(o->max_levels);
+    }
     return s;
 }
 

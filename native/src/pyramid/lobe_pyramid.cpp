@@ -46,6 +46,12 @@ std::vector<VmfLobe> LobePyramid::texel_lobes(int level, int x, int y) const
 
 int LobePyramid::lobe_count(int level, int x, int y) const { return int(texel_lobes(level, x, y).size()); }
 
+int pyramid_level_count(int width, int height, const PyramidSettings& settings)
+{
+    const int all = level_count(width, height);
+    return settings.max_levels > 0 ? std::min(all, settings.max_levels) : all;
+}
+
 LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& settings, const ProgressTick& tick)
 {
     LobePyramid pyramid;
@@ -53,7 +59,7 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
     pyramid.wrap = settings.wrap;
     pyramid.slots = std::clamp(settings.fit.max_lobes, 1, kMaxLobes);
     const int slots = pyramid.slots;
-    const int levels = level_count(map.width, map.height);
+    const int levels = pyramid_level_count(map.width, map.height, settings);
     pyramid.levels.resize(static_cast<size_t>(levels));
     for (int l = 0; l < levels; ++l) {
         LobeLevel& level = pyramid.levels[size_t(l)];

@@ -43,7 +43,12 @@ struct PyramidSettings {
     int budget_sample_cap = 256;
     // The most memory a fit or bake may use (bake/memory_budget.h); 0: physical memory.
     uint64_t max_memory_bytes = 0;
+    // Levels fitted, from level 0 up; 0: every level down to 1×1 (pyramid_level_count()).
+    int max_levels = 0;
 };
+
+// The levels a pyramid of a width × height map has under `settings`.
+int pyramid_level_count(int width, int height, const PyramidSettings& settings);
 
 struct LobeLevel {
     LevelSize size;
