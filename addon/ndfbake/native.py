@@ -85,6 +85,7 @@ class WriteOptions(ctypes.Structure):
         ("precision", ctypes.c_int),
         ("color_path", ctypes.c_char_p),
         ("source_name", ctypes.c_char_p),
+        ("atlas", ctypes.c_int32),
     ]
 
 
@@ -257,7 +258,7 @@ class Context:
 
     def bake(self, input_path, out_dir, *, max_lobes=4, tolerance=0.0, roughness=0.5, wrap=WRAP_REPEAT,
              threads=0, srgb=SRGB_AS_DATA, convention=CONVENTION_OPENGL, progress=None, source_name=None,
-             max_levels=0):
+             max_levels=0, atlas=False):
         """ndfb_bake with a GGX base BRDF of Blender roughness `roughness`.
 
         progress(stage, fraction) -> bool: return True to cancel. Exceptions inside it cancel too.
@@ -286,6 +287,7 @@ class Context:
         write = Library.init_options(WriteOptions, lib.ndfb_write_options_init)
         name = _encode(source_name) if source_name else None
         write.source_name = name
+        write.atlas = 1 if atlas else 0
         self.check(lib.ndfb_bake(self.handle, _encode(input_path), _encode(out_dir), ctypes.byref(decode),
                                  ctypes.byref(fit), ctypes.byref(write)))
         del callback

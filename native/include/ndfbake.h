@@ -114,6 +114,12 @@ typedef struct ndfb_write_options {
     ndfb_precision precision;     /* default half */
     const char* color_path;       /* optional base-colour image of the same size: per-lobe colour (eq. 22) */
     const char* source_name;      /* recorded in the files; default: the input path */
+    /* Non-zero: also write atlas_lobeJ.exr, every level of lobe slot J in one image, for renderers
+       without MIP levels of their own: level 0 on the left, levels 1, 2, ... stacked top-down in a
+       column to its right, each framed by a one-texel border of the texels the wrap mode puts
+       there, so bilinear filtering inside a level is exact. report.json's "atlas" gives the size
+       and, per level, the frame's top-left corner (x, y; texels start at x + 1, y + 1) and size. */
+    int32_t atlas;
 } ndfb_write_options;
 
 typedef struct ndfb_repairs {

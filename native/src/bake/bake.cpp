@@ -10,6 +10,7 @@
 #include <set>
 
 #include "bake/level_stats.h"
+#include "bake/lobe_atlas.h"
 #include "bake/memory_budget.h"
 #include "error.h"
 #include "io/atomic_file.h"
@@ -109,6 +110,13 @@ std::vector<std::vector<float>> color_textures(const LobePyramid& pyramid, const
     return textures;
 }
 
+AtlasLayout pyramid_atlas_layout(const LobePyramid& pyramid)
+{
+    std::vector<LevelSize> sizes;
+    for (int level = 0; level < pyramid.level_count(); ++level) sizes.push_back(pyramid.size(level));
+    return atlas_layout(sizes);
+}
+
 std::string hex64(uint64_t value)
 {
     char buffer[17];
@@ -159,7 +167,7 @@ std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded,
                         const BakeTimings& timings, const std::vector<std::string>& files)
 {
     const MemoryEstimate memory = estimate_bake_memory(pyramid.source.width, pyramid.source.height,
-                                                       source_layout(decoded), settings, !write.color_path.empty());
+                                                       source_layout(decoded), settings, write);
     JsonWriter json;
     json.begin_object();
     json.value("format_version", kFileFormatVersion).value("ndfbake_version", NDFBAKE_VERSION_STRING);
@@ -236,6 +244,13 @@ std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded,
     json.value("peak_memory_bytes", process_peak_memory())
         .value("estimated_memory_bytes", memory.peak())
         .value("memory_limit_bytes", effective_memory_limit(settings.max_memory_bytes));
+    if (write.atlas) {
+        const AtlasLayout layout = pyramid_atlas_layout(pyramid);
+        json.begin_object("atlas").value("width", layout.width).value("height", layout.height).begin_array("levels");
+        for (const AtlasLevel& l : layout.levels)
+            json.begin_object().value("x", l.x).value("y", l.y).value("width", l.width).value("height", l.height).end_object();
+        json.end_array().end_object();
+    }
     json.begin_array("files");
     for (const std::string& f : files) json.value(nullptr, fs::path(f).filename().string());
     json.value(nullptr, "report.json");
@@ -246,7 +261,7 @@ std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded,
 
 bool is_bake_file(const std::string& name)
 {
-    static const std::regex pattern(R"(level\d+_(lobe|color)\d+\.exr)");
+    static const std::regex pattern(R"(level\d+_(lobe|color)\d+\.exr|atlas_lobe\d+\.exr)");
     return std::regex_match(name, pattern);
 }
 
@@ -267,6 +282,13 @@ std::string lobe_file_name(int level, int lobe)
 {
     char buffer[48];
     std::snprintf(buffer, sizeof buffer, "level%02d_lobe%d.exr", level, lobe);
+    return buffer;
+}
+
+std::string atlas_file_name(int lobe)
+{
+    char buffer[48];
+    std::snprintf(buffer, sizeof buffer, "atlas_lobe%d.exr", lobe);
     return buffer;
 }
 
@@ -330,6 +352,29 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
                 }
             }
         }
+        if (write.atlas) {
+            const AtlasLayout layout = pyramid_atlas_layout(pyramid);
+            std::string places;
+            for (const AtlasLevel& l : layout.levels) {
+                if (!places.empty()) places += ';';
+                for (int v : {l.x, l.y, l.width, l.height}) places.append(std::to_string(v)).push_back(',');
+                places.pop_back();
+            }
+            std::vector<float> atlas(size_t(layout.width) * size_t(layout.height) * 4);
+            for (int lobe = 0; lobe < pyramid.slots; ++lobe) {
+                check_progress(progress, "write", 1.0);
+                std::fill(atlas.begin(), atlas.end(), 0.0f);
+                for (int level = 0; level < pyramid.level_count(); ++level)
+                    place_atlas_level(layout, level, lobe_texture(pyramid, level, lobe).data(), pyramid.wrap, atlas);
+                std::vector<ExrAttribute> attributes =
+                    file_attributes(pyramid, decoded, settings, write, -1, lobe, -1.0f,
+                                    "mip atlas of a vmf lobe slot: R = alpha, GBA = alpha * r");
+                attributes.push_back({"ndfbake:atlas_levels", places});
+                names.push_back(atlas_file_name(lobe));
+                write_rgba_exr((staging / names.back()).string(), layout.width, layout.height, atlas.data(),
+                               write.precision, attributes);
+            }
+        }
         timings.write = seconds_since(start);
         write_text_atomic((staging / "report.json").string(),
                           report_json(pyramid, decoded, settings, write, stats, timings, names));
@@ -376,7 +421,7 @@ BakeOutcome bake_file_into(const std::string& input_path, const std::string& out
             const SourceLayout layout{spec.nchannels, int(spec.format.size()),
                                       base == OIIO::TypeDesc::HALF || base == OIIO::TypeDesc::FLOAT ||
                                           base == OIIO::TypeDesc::DOUBLE};
-            check_memory_budget(estimate_bake_memory(spec.width, spec.height, layout, settings, !write.color_path.empty()),
+            check_memory_budget(estimate_bake_memory(spec.width, spec.height, layout, settings, write),
                                 settings.max_memory_bytes, spec.width, spec.height, settings.fit.max_lobes,
                                 "cannot bake '" + input_path + "'");
         }

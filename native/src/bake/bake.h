@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "bake/write_settings.h"
 #include "io/lobe_exr.h"
 #include "io/normal_decode.h"
 #include "pyramid/lobe_pyramid.h"
@@ -14,12 +15,6 @@ namespace ndfbake {
 
 // Progress of a bake: stage name and fraction of the stage; return false to cancel.
 using StageProgress = std::function<bool(const char* stage, double fraction)>;
-
-struct WriteSettings {
-    PixelPrecision precision = PixelPrecision::half;
-    std::string color_path;   // optional base-colour image: per-lobe colour files
-    std::string source_name;  // recorded in every file
-};
 
 struct BakeTimings {
     double decode = 0.0, fit = 0.0, measure = 0.0, write = 0.0;  // seconds

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "bake/lobe_atlas.h"
 #include "error.h"
 #include "ndf/weighted_normal.h"
 #include "pyramid/parallel.h"
@@ -27,7 +28,7 @@ std::string human_bytes(uint64_t bytes)
 uint64_t MemoryEstimate::peak() const { return std::max({decode, fit, write}); }
 
 MemoryEstimate estimate_bake_memory(int width, int height, const SourceLayout& source,
-                                    const PyramidSettings& settings, bool with_color)
+                                    const PyramidSettings& settings, const WriteSettings& write)
 {
     MemoryEstimate e;
     if (width <= 0 || height <= 0) return e;
@@ -71,7 +72,16 @@ MemoryEstimate estimate_bake_memory(int width, int height, const SourceLayout& s
     // One level-0 lobe texture in float and converted for the file (at most float again).
     uint64_t writing = pixels * 4 * sizeof(float) * 2;
     // Colour: every slot's level-0 texture at once, the colour image twice and its decoded pixels.
-    if (with_color) writing += slots * pixels * 4 * sizeof(float) + 2 * normals + pixels * 4 * sizeof(float);
+    if (!write.color_path.empty())
+        writing += slots * pixels * 4 * sizeof(float) + 2 * normals + pixels * 4 * sizeof(float);
+    if (write.atlas) {
+        // One lobe's atlas at a time, in float and converted for the file, beside one level.
+        std::vector<LevelSize> sizes;
+        for (int l = 0; l < levels; ++l) sizes.push_back(level_size(width, height, l));
+        const AtlasLayout atlas = atlas_layout(sizes);
+        writing = std::max(writing, uint64_t(atlas.width) * uint64_t(atlas.height) * 4 * sizeof(float) * 2 +
+                                        pixels * 4 * sizeof(float));
+    }
     e.write = normals + pyramid + writing;
     return e;
 }

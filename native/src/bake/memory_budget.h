@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <string>
 
+#include "bake/write_settings.h"
 #include "pyramid/lobe_pyramid.h"
 
 namespace ndfbake {
@@ -20,7 +21,7 @@ struct SourceLayout {
 // The peak of the stages of a bake, in bytes: decoding (file samples, OpenImageIO's own copy and
 // the normals), fitting (the map, the pyramid's copy of it, every level's lobes, and the largest
 // footprint the worker threads gather and hand to EM at once), writing (one level-0 texture in
-// float and as converted for the file, the colour textures when with_color). Allocator overhead
+// float and as converted for the file, the colour textures, one lobe's atlas). Allocator overhead
 // and the process's own baseline (libraries) are not included.
 struct MemoryEstimate {
     uint64_t decode = 0, fit = 0, write = 0;
@@ -28,7 +29,7 @@ struct MemoryEstimate {
 };
 
 MemoryEstimate estimate_bake_memory(int width, int height, const SourceLayout& source,
-                                    const PyramidSettings& settings, bool with_color);
+                                    const PyramidSettings& settings, const WriteSettings& write);
 
 // The limit in force: `requested`, or the machine's physical memory when it is 0.
 uint64_t effective_memory_limit(uint64_t requested);

@@ -139,6 +139,7 @@ WriteSettings to_write(const ndfb_write_options* o)
     w.precision = precision == NDFB_PRECISION_FLOAT ? PixelPrecision::single : PixelPrecision::half;
     if (o->color_path) w.color_path = o->color_path;
     if (o->source_name) w.source_name = o->source_name;
+    if (o->struct_size >= offsetof(ndfb_write_options, atlas) + sizeof(o->atlas)) w.atlas = o->atlas != 0;
     return w;
 }
 
@@ -320,7 +321,7 @@ NDFB_API ndfb_status ndfb_fit(ndfb_context ctx, ndfb_normal_map map, const ndfb_
         const PyramidSettings settings = to_pyramid(options);
         const StageProgress progress = to_progress(options);
         const NormalMap& m = map->decoded.map;
-        check_memory_budget(estimate_bake_memory(m.width, m.height, SourceLayout{}, settings, false),
+        check_memory_budget(estimate_bake_memory(m.width, m.height, SourceLayout{}, settings, WriteSettings{}),
                             settings.max_memory_bytes, m.width, m.height, settings.fit.max_lobes, "cannot fit the map");
         auto result = std::make_unique<ndfb_pyramid_s>();
         result->pyramid = build_lobe_pyramid(map->decoded.map, settings, [&](double fraction) {
