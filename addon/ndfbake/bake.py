@@ -16,11 +16,16 @@ Files (choices the design leaves open):
   them with relative paths, so the .blend and its folders move together. An unsaved .blend has no
   "beside": baking it is refused (UNSAVED_BLEND). With `pack`, the level-0 textures are also
   packed into the .blend (the files stay until Revert).
-- The library writes every level (level-of-detail work will use them) and report.json through a
-  staging folder renamed into place, so a failed or cancelled re-bake leaves the previous files;
-  a folder this bake created is removed again when the bake fails or is cancelled.
-- The node group samples level 0 only: EEVEE MIP-maps it by itself and the encoding is linear;
-  Cycles does no MIP-mapping and averages pixels.
+- The library writes the levels the scene's cameras reach (scene_lod.py), one MIP atlas per lobe
+  slot, and report.json through a staging folder renamed into place, so a failed or cancelled
+  re-bake leaves the previous files; a folder this bake created is removed again when the bake
+  fails or is cancelled.
+- Level of detail (BakeSettings.level_of_detail): "SCENE" (default) samples the atlases at the
+  level the node group computes from the camera distance, the view angle and the constants
+  scene_lod.py measured (texel density, pixel angle), in both engines; "RENDERER" samples
+  level 0 with Linear interpolation and leaves filtering to the renderer (EEVEE MIP-maps it; Cycles
+  only averages its pixel samples). A material no camera sees, or a scene without a camera, gets
+  "RENDERER". README gives the measurement behind the default.
 """
 import json
 import os
@@ -31,7 +36,7 @@ from dataclasses import dataclass, field
 
 import bpy
 
-from . import material_scan, native, nodes
+from . import material_scan, native, nodes, scene_lod
 
 RECORD_KEY = material_scan.RECORD_KEY
 RECORD_VERSION = 1
@@ -46,7 +51,8 @@ class BakeSettings:
     max_lobes: int = 4          # 1..8 lobes per texel
     tolerance: float = 0.0      # relative effective-BRDF error a texel may keep (0: max_lobes everywhere)
     threads: int = 0            # 0: every core
-    pack: bool = False          # also pack the level-0 lobe textures into the .blend
+    pack: bool = False          # also pack the lobe textures into the .blend
+    level_of_detail: str = "SCENE"  # "SCENE": atlases at a level from the camera; "RENDERER": level 0
 
 
 class BakeError(Exception):
@@ -118,10 +124,33 @@ def prepare(material, settings=None):
     if os.path.exists(absolute) and not os.path.isdir(absolute):
         raise BakeError("OUTPUT_NOT_WRITABLE", "cannot write the lobe folder %s: a file of that name is in the way"
                         % absolute)
+    if settings.level_of_detail not in ("SCENE", "RENDERER"):
+        raise BakeError("BAD_SETTINGS", "level of detail must be SCENE or RENDERER, got %r" % settings.level_of_detail)
+    lod = None
+    scene = bpy.context.scene
+    if settings.level_of_detail == "SCENE" and scene.camera is not None and scene.camera.type == "CAMERA":
+        uv_map = material.node_tree.nodes[scan.targets[0].normal_map].uv_map
+        needs = scene_lod.material_lod(scene, material, tuple(scan.image.size), uv_map)
+        if needs.texels_per_unit > 0.0:
+            camera = scene_lod.camera_footprint(scene, scene.camera)
+            lod = LodPlan(levels=needs.levels, texels_per_unit=needs.texels_per_unit,
+                          pixel_angle=camera.pixel_angle, pixel_size=camera.pixel_size,
+                          footprint_max=needs.footprint_max)
     return BakeJob(material_name=material.name, image_path=scan.image_path, folder=relative, out_dir=absolute,
                    wrap=native.WRAP_REPEAT if scan.wrap == "REPEAT" else native.WRAP_CLAMP,
                    roughness=min(max(scan.roughness, 0.01), 1.0), settings=settings,
-                   targets=[(t.principled, t.normal_map, t.image_texture) for t in scan.targets])
+                   targets=[(t.principled, t.normal_map, t.image_texture) for t in scan.targets], lod=lod)
+
+
+@dataclass
+class LodPlan:
+    """The scene's level of detail for one material (scene_lod.py): levels to bake, and the
+    footprint constants of the node group."""
+    levels: int
+    texels_per_unit: float
+    pixel_angle: float
+    pixel_size: float
+    footprint_max: float
 
 
 # ---- step 2: the native bake (thread-safe: no bpy) ---------------------------------------------
@@ -130,7 +159,7 @@ class BakeJob:
     """The native part of a bake. run() works on any thread; start()/cancel()/done/progress let
     a modal operator drive it from Blender's main thread."""
 
-    def __init__(self, material_name, image_path, folder, out_dir, wrap, roughness, settings, targets):
+    def __init__(self, material_name, image_path, folder, out_dir, wrap, roughness, settings, targets, lod=None):
         self.material_name = material_name
         self.image_path = image_path
         self.folder = folder
@@ -139,6 +168,7 @@ class BakeJob:
         self.roughness = roughness
         self.settings = settings
         self.targets = targets
+        self.lod = lod           # LodPlan, or None: level 0 filtered by the renderer
         self.stage = ""
         self.fraction = 0.0
         self.seconds = 0.0
@@ -198,7 +228,8 @@ class BakeJob:
             with lib.context() as ctx:
                 ctx.bake(self.image_path, self.out_dir, max_lobes=self.settings.max_lobes,
                          tolerance=self.settings.tolerance, roughness=self.roughness, wrap=self.wrap,
-                         threads=self.settings.threads, progress=callback)
+                         threads=self.settings.threads, progress=callback,
+                         max_levels=self.lod.levels if self.lod else 0, atlas=self.lod is not None)
         except native.Error as e:
             if not existed:
                 _remove_empty_folder(self.out_dir)
@@ -256,10 +287,12 @@ def _read_report(out_dir):
         return {}
 
 
-def _level0_lobes(out_dir):
-    pattern = re.compile(r"level00_lobe(\d+)\.exr$")
+def _lobe_textures(out_dir, atlas):
+    """The textures the node group samples: atlas_lobeJ.exr, or level00_lobeJ.exr."""
+    name = "atlas_lobe%d.exr" if atlas else "level00_lobe%d.exr"
+    pattern = re.compile(name.replace(".", r"\.").replace("%d", r"(\d+)") + "$")
     indices = sorted(int(m.group(1)) for m in (pattern.match(n) for n in os.listdir(out_dir)) if m)
-    return [os.path.join(out_dir, "level00_lobe%d.exr" % j) for j in indices]
+    return [os.path.join(out_dir, name % j) for j in indices]
 
 
 def _relative(path):
@@ -270,7 +303,7 @@ def _relative(path):
 
 
 def _load_lobe_images(material_name, paths, pack):
-    """Level-0 lobe images (Non-Color, channel-packed alpha: A is data, α·r_z), named
+    """Lobe images (Non-Color, channel-packed alpha: A is data, α·r_z), named
     "<material> lobe j" when this call creates them. Returns the images and the names of those
     this call created."""
     images, created = [], []
@@ -323,10 +356,18 @@ def finish(job):
         if any(tree.nodes.get(n) is None for n in (principled, normal_map, texture)):
             raise BakeError("MATERIAL_CHANGED", "the nodes of '%s' changed during the bake; bake again"
                             % material.name)
-    paths = _level0_lobes(job.out_dir)
+    paths = _lobe_textures(job.out_dir, job.lod is not None)
     if not paths:
         raise BakeError("NATIVE_ERROR", "the bake wrote no lobe texture into %s" % job.out_dir)
     report = _read_report(job.out_dir)
+    atlas = None
+    if job.lod is not None:
+        layout = report.get("atlas") or {}
+        if not layout.get("levels"):
+            raise BakeError("NATIVE_ERROR", "report.json in %s has no atlas layout" % job.out_dir)
+        atlas = nodes.AtlasLod(width=layout["width"], height=layout["height"], levels=layout["levels"],
+                               texels_per_unit=job.lod.texels_per_unit, pixel_angle=job.lod.pixel_angle,
+                               pixel_size=job.lod.pixel_size)
 
     old = material_scan.record(material)
     old_images = []
@@ -341,7 +382,8 @@ def finish(job):
             principled = tree.nodes[principled_name]
             normal_map = tree.nodes[normal_map_name]
             texture = tree.nodes[texture_name]
-            group = nodes.build_material_group("NDFB " + material.name, principled, normal_map, texture, images)
+            group = nodes.build_material_group("NDFB " + material.name, principled, normal_map, texture, images,
+                                               atlas)
             targets.append({"principled": principled_name, "group_node": "", "node_group": group.name,
                             "bypassed": []})
             node, bypassed = nodes.insert_group_node(tree, group, principled, normal_map, texture)
@@ -364,6 +406,11 @@ def finish(job):
 
     files = report.get("files") or sorted(os.listdir(job.out_dir))
     summary = summarize(report, job.seconds, len(images))
+    if job.lod is not None:
+        summary += "; level of detail from the camera (%.1f texels per unit, largest footprint %.0f texels)" % (
+            job.lod.texels_per_unit, job.lod.footprint_max)
+    else:
+        summary += "; level 0 filtered by the renderer"
     rec = {
         "version": RECORD_VERSION,
         "folder": job.folder,
@@ -374,7 +421,7 @@ def finish(job):
         "packed": bool(job.settings.pack),
         "summary": summary,
         "settings": {"max_lobes": job.settings.max_lobes, "tolerance": job.settings.tolerance,
-                     "roughness": job.roughness},
+                     "roughness": job.roughness, "level_of_detail": "SCENE" if job.lod else "RENDERER"},
     }
     material[RECORD_KEY] = json.dumps(rec)
     return BakeResult(material=material.name, folder=job.folder, lobes=len(images), seconds=job.seconds,
@@ -382,7 +429,8 @@ def finish(job):
 
 
 def _is_bake_file(name):
-    return name == "report.json" or re.fullmatch(r"level\d+_(lobe|color)\d+\.exr", name) is not None
+    return name == "report.json" or re.fullmatch(r"level\d+_(lobe|color)\d+\.exr|atlas_lobe\d+\.exr",
+                                                 name) is not None
 
 
 # ---- whole bakes ---------------------------------------------------------------------------------

@@ -89,6 +89,25 @@ class WriteOptions(ctypes.Structure):
     ]
 
 
+class Mesh(ctypes.Structure):
+    _fields_ = [
+        ("struct_size", ctypes.c_uint32),
+        ("positions", ctypes.POINTER(ctypes.c_float)),
+        ("vertex_count", ctypes.c_size_t),
+        ("face_sizes", ctypes.POINTER(ctypes.c_uint32)),
+        ("face_count", ctypes.c_size_t),
+        ("corner_vertices", ctypes.POINTER(ctypes.c_uint32)),
+        ("corner_count", ctypes.c_size_t),
+        ("normals", ctypes.POINTER(ctypes.c_float)),
+        ("normal_domain", ctypes.c_int),
+        ("uvs", ctypes.POINTER(ctypes.c_float)),
+        ("uv_domain", ctypes.c_int),
+    ]
+
+
+PER_CORNER, PER_VERTEX = 0, 1
+
+
 class Error(Exception):
     """A failed library call: status code, its name (NDFB_ERROR_...) and the library's message."""
 
@@ -162,6 +181,9 @@ class Library:
             "ndfb_synthesize": (c.c_int, [vp, c.c_char_p, c.c_uint32, c.c_uint32, c.c_uint32, c.POINTER(vp)]),
             "ndfb_normal_map_save": (c.c_int, [vp, vp, c.c_char_p]),
             "ndfb_normal_map_destroy": (None, [vp]),
+            "ndfb_mesh_init": (None, [c.POINTER(Mesh)]),
+            "ndfb_texel_density": (c.c_int, [vp, c.POINTER(Mesh), c.POINTER(c.c_float), c.c_size_t,
+                                             c.POINTER(c.c_double)]),
             "ndfb_describe_image": (c.c_int, [vp, c.c_char_p, c.c_char_p, c.c_size_t, c.POINTER(c.c_size_t)]),
         }
         for name, (restype, argtypes) in sig.items():
@@ -291,6 +313,33 @@ class Context:
         self.check(lib.ndfb_bake(self.handle, _encode(input_path), _encode(out_dir), ctypes.byref(decode),
                                  ctypes.byref(fit), ctypes.byref(write)))
         del callback
+
+    def texel_density(self, positions, face_sizes, corner_vertices, vertex_normals, corner_uvs):
+        """ndfb_texel_density over a whole mesh: UV units per world unit, sqrt(UV area / world
+        area). Arrays (numpy, C-contiguous): positions (n, 3) float32, face_sizes uint32,
+        corner_vertices uint32 in face order, vertex_normals (n, 3) float32, corner_uvs (corners, 2)
+        float32."""
+        import numpy as np
+        arrays = [np.ascontiguousarray(positions, dtype=np.float32), np.ascontiguousarray(face_sizes, dtype=np.uint32),
+                  np.ascontiguousarray(corner_vertices, dtype=np.uint32),
+                  np.ascontiguousarray(vertex_normals, dtype=np.float32), np.ascontiguousarray(corner_uvs, dtype=np.float32)]
+        position, sizes, corners, normals, uvs = arrays
+
+        def pointer(array, kind):
+            return array.ctypes.data_as(ctypes.POINTER(kind))
+        lib = self.lib.lib
+        mesh = Mesh()
+        lib.ndfb_mesh_init(ctypes.byref(mesh))
+        mesh.positions, mesh.vertex_count = pointer(position, ctypes.c_float), position.size // 3
+        mesh.face_sizes, mesh.face_count = pointer(sizes, ctypes.c_uint32), sizes.size
+        mesh.corner_vertices, mesh.corner_count = pointer(corners, ctypes.c_uint32), corners.size
+        mesh.normals, mesh.normal_domain = pointer(normals, ctypes.c_float), PER_VERTEX
+        mesh.uvs, mesh.uv_domain = pointer(uvs, ctypes.c_float), PER_CORNER
+        per_face = np.empty(sizes.size, dtype=np.float32)
+        total = ctypes.c_double()
+        self.check(lib.ndfb_texel_density(self.handle, ctypes.byref(mesh), pointer(per_face, ctypes.c_float),
+                                          per_face.size, ctypes.byref(total)))
+        return float(total.value)
 
     def synthesize(self, pattern, width, height, seed=1):
         handle = ctypes.c_void_p()

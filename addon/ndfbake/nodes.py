@@ -33,12 +33,17 @@ mix chain): the group is built for the lobe slots the bake wrote.
 OSL: Debian's Blender is built without OSL (bpy.app.build_options.cycles_osl is False), so no OSL
 Script variant is offered; `osl_status()` says so. The stock-node group works in both engines.
 """
+from dataclasses import dataclass
+
 import bpy
 
 GROUP_VERSION = 1
 TAG = "ndfbake"                       # ID/custom property marking what this add-on created
 LOBE_GROUP = "NDFB vMF Lobe v%d" % GROUP_VERSION
 INTEGRAL_GROUP = "NDFB GGX Sphere Integral v%d" % GROUP_VERSION
+LOD_GROUP = "NDFB Level of Detail v%d" % GROUP_VERSION
+TAPS_GROUP = "NDFB Atlas Taps v%d" % GROUP_VERSION
+BILINEAR_GROUP = "NDFB Bilinear v%d" % GROUP_VERSION
 GGX_VMF_WIDENING = 1.5                # native/src/math/brdf.h kGgxVmfWidening
 E = 2.718281828459045
 
@@ -201,6 +206,168 @@ def lobe_group():
     return tree
 
 
+def _mix(tree, data_type, factor, a, b, location):
+    """ShaderNodeMix: (1 − factor)·a + factor·b, for FLOAT or VECTOR data."""
+    node = tree.nodes.new("ShaderNodeMix")
+    node.data_type = data_type
+    node.clamp_factor = False
+    node.location = location
+    first = {"FLOAT": 2, "VECTOR": 4}[data_type]
+    _link(tree, factor, node.inputs[0])
+    _link(tree, a, node.inputs[first])
+    _link(tree, b, node.inputs[first + 1])
+    return node.outputs[{"FLOAT": 0, "VECTOR": 1}[data_type]]
+
+
+def level_of_detail_group():
+    """Level = clamp(log2(footprint), 0, Max Level) with the footprint of scene_lod.py, from the
+    distance to the camera and the angle of view at the shading point."""
+    tree = _find_group(LOD_GROUP)
+    if tree is not None:
+        return tree
+    from .scene_lod import MIN_FACING
+    tree = _new_group(LOD_GROUP)
+    for name in ("Texels per Unit", "Pixel Angle", "Pixel Size", "Max Level"):
+        _add_socket(tree, "INPUT", "NodeSocketFloat", name)
+    _add_socket(tree, "OUTPUT", "NodeSocketFloat", "Level")
+    gin = tree.nodes.new("NodeGroupInput")
+    gin.location = (-900, 0)
+    gout = tree.nodes.new("NodeGroupOutput")
+    gout.location = (700, 0)
+    camera = tree.nodes.new("ShaderNodeCameraData")
+    camera.location = (-900, 300)
+    geometry = tree.nodes.new("ShaderNodeNewGeometry")
+    geometry.location = (-900, -300)
+    distance = camera.outputs["View Distance"]
+    facing = _math(tree, "ABSOLUTE", _vmath(tree, "DOT_PRODUCT", geometry.outputs["Incoming"],
+                                            geometry.outputs["True Normal"], location=(-700, -300), output=1),
+                   location=(-550, -300))
+    stretch = _math(tree, "SQRT", _math(tree, "MAXIMUM", facing, MIN_FACING, location=(-400, -300)),
+                    location=(-250, -300))
+    world = _math(tree, "MULTIPLY_ADD", distance, gin.outputs["Pixel Angle"], gin.outputs["Pixel Size"],
+                  location=(-550, 200))
+    texels = _math(tree, "DIVIDE", _math(tree, "MULTIPLY", world, gin.outputs["Texels per Unit"],
+                                         location=(-400, 200)), stretch, location=(-100, 100))
+    level = _math(tree, "LOGARITHM", _math(tree, "MAXIMUM", texels, 1e-6, location=(50, 100)), 2.0,
+                  location=(200, 100))
+    level = _math(tree, "MINIMUM", _math(tree, "MAXIMUM", level, 0.0, location=(350, 100)),
+                  gin.outputs["Max Level"], location=(500, 100))
+    tree.links.new(level, gout.inputs["Level"])
+    return tree
+
+
+def atlas_taps_group():
+    """The four point lookups of bilinear filtering inside one level of a MIP atlas (native
+    bake/lobe_atlas.h; tests/native/test_lobe_atlas.cpp checks this addressing): inputs UV, the
+    level's frame X, Y (top-left, rows counted from the top) and size W, H, the atlas size, and
+    Repeat (1: the texture tiles, 0: it clamps); outputs UV 00/10/01/11 and the fractions Fx, Fy."""
+    tree = _find_group(TAPS_GROUP)
+    if tree is not None:
+        return tree
+    tree = _new_group(TAPS_GROUP)
+    _add_socket(tree, "INPUT", "NodeSocketVector", "UV")
+    for name in ("X", "Y", "W", "H", "Atlas Width", "Atlas Height", "Repeat"):
+        _add_socket(tree, "INPUT", "NodeSocketFloat", name)
+    for name in ("UV 00", "UV 10", "UV 01", "UV 11"):
+        _add_socket(tree, "OUTPUT", "NodeSocketVector", name)
+    for name in ("Fx", "Fy"):
+        _add_socket(tree, "OUTPUT", "NodeSocketFloat", name)
+    gin = tree.nodes.new("NodeGroupInput")
+    gin.location = (-1200, 0)
+    gout = tree.nodes.new("NodeGroupOutput")
+    gout.location = (900, 0)
+    sep = tree.nodes.new("ShaderNodeSeparateXYZ")
+    sep.location = (-1000, 200)
+    tree.links.new(gin.outputs["UV"], sep.inputs[0])
+    aw, ah = gin.outputs["Atlas Width"], gin.outputs["Atlas Height"]
+
+    def axis(value, size, y):
+        wrapped = _mix(tree, "FLOAT", gin.outputs["Repeat"], _math(tree, "MINIMUM", _math(
+            tree, "MAXIMUM", value, 0.0, location=(-850, y)), 1.0, location=(-700, y)),
+            _math(tree, "FRACT", value, location=(-700, y - 100)), location=(-550, y))
+        texel = _math(tree, "MULTIPLY_ADD", wrapped, size, -0.5, location=(-400, y))
+        first = _math(tree, "FLOOR", texel, location=(-250, y))
+        return first, _math(tree, "SUBTRACT", texel, first, location=(-100, y - 100))
+
+    x0, fx = axis(sep.outputs["X"], gin.outputs["W"], 300)
+    y0, fy = axis(sep.outputs["Y"], gin.outputs["H"], -100)
+    # Column X + 1 + x0, row (from the bottom) Atlas Height − 1 − Y − H + y0; centres at + 0.5.
+    column = _math(tree, "ADD", _math(tree, "ADD", gin.outputs["X"], 1.5, location=(-100, 400)), x0,
+                   location=(50, 400))
+    row_base = _math(tree, "SUBTRACT", _math(tree, "SUBTRACT", _math(tree, "SUBTRACT", ah, 0.5, location=(-250, -300)),
+                                                 gin.outputs["Y"], location=(-100, -300)),
+                     gin.outputs["H"], location=(50, -300))
+    row = _math(tree, "ADD", row_base, y0, location=(200, -200))
+    u0 = _math(tree, "DIVIDE", column, aw, location=(300, 400))
+    u1 = _math(tree, "DIVIDE", _math(tree, "ADD", column, 1.0, location=(200, 300)), aw, location=(350, 300))
+    v0 = _math(tree, "DIVIDE", row, ah, location=(350, -200))
+    v1 = _math(tree, "DIVIDE", _math(tree, "ADD", row, 1.0, location=(350, -300)), ah, location=(500, -300))
+    for name, (u, v), y in (("UV 00", (u0, v0), 300), ("UV 10", (u1, v0), 150), ("UV 01", (u0, v1), 0),
+                            ("UV 11", (u1, v1), -150)):
+        comb = tree.nodes.new("ShaderNodeCombineXYZ")
+        comb.location = (700, y)
+        tree.links.new(u, comb.inputs["X"])
+        tree.links.new(v, comb.inputs["Y"])
+        tree.links.new(comb.outputs[0], gout.inputs[name])
+    tree.links.new(fx, gout.inputs["Fx"])
+    tree.links.new(fy, gout.inputs["Fy"])
+    return tree
+
+
+def bilinear_group():
+    """(1 − Fy)·((1 − Fx)·00 + Fx·10) + Fy·((1 − Fx)·01 + Fx·11) of four RGBA lookups."""
+    tree = _find_group(BILINEAR_GROUP)
+    if tree is not None:
+        return tree
+    tree = _new_group(BILINEAR_GROUP)
+    corners = ("00", "10", "01", "11")
+    for c in corners:
+        _add_socket(tree, "INPUT", "NodeSocketColor", "Color " + c)
+        _add_socket(tree, "INPUT", "NodeSocketFloat", "Alpha " + c)
+    for name in ("Fx", "Fy"):
+        _add_socket(tree, "INPUT", "NodeSocketFloat", name)
+    _add_socket(tree, "OUTPUT", "NodeSocketColor", "Color")
+    _add_socket(tree, "OUTPUT", "NodeSocketFloat", "Alpha")
+    gin = tree.nodes.new("NodeGroupInput")
+    gin.location = (-600, 0)
+    gout = tree.nodes.new("NodeGroupOutput")
+    gout.location = (400, 0)
+    fx, fy = gin.outputs["Fx"], gin.outputs["Fy"]
+    for kind, data_type, y in (("Color", "VECTOR", 200), ("Alpha", "FLOAT", -200)):
+        bottom = _mix(tree, data_type, fx, gin.outputs[kind + " 00"], gin.outputs[kind + " 10"], (-300, y + 100))
+        top = _mix(tree, data_type, fx, gin.outputs[kind + " 01"], gin.outputs[kind + " 11"], (-300, y - 100))
+        tree.links.new(_mix(tree, data_type, fy, bottom, top, (0, y)), gout.inputs[kind])
+    return tree
+
+
+def atlas_table_group(name, atlas):
+    """Level → the level's frame X, Y and size W, H in the atlas: a step sum over the levels,
+    Σ_k [Level ≥ k]·(v_k − v_(k−1)), exact for integer levels."""
+    tree = _new_group(name)
+    _add_socket(tree, "INPUT", "NodeSocketFloat", "Level")
+    keys = ("X", "Y", "W", "H")
+    for key in keys:
+        _add_socket(tree, "OUTPUT", "NodeSocketFloat", key)
+    gin = tree.nodes.new("NodeGroupInput")
+    gin.location = (-400, 0)
+    gout = tree.nodes.new("NodeGroupOutput")
+    gout.location = (300 + 150 * len(atlas.levels), 0)
+    totals = {key: 0.0 for key in keys}
+    previous = {key: 0.0 for key in keys}
+    for k, place in enumerate(atlas.levels):
+        values = dict(zip(keys, (place["x"], place["y"], place["width"], place["height"])))
+        reached = _math(tree, "GREATER_THAN", gin.outputs["Level"], k - 0.5, location=(-200 + 150 * k, 300))
+        for i, key in enumerate(keys):
+            step = float(values[key] - previous[key])
+            if step != 0.0:
+                totals[key] = _math(tree, "MULTIPLY_ADD", reached, step, totals[key],
+                                    location=(-200 + 150 * k, 150 - 150 * i))
+        previous = values
+    for key in keys:
+        _link(tree, totals[key], gout.inputs[key])
+    return tree
+
+
 # ---- the per-material group --------------------------------------------------------------------
 
 def carried_inputs(principled):
@@ -222,9 +389,109 @@ def _value(socket):
     return tuple(value) if hasattr(value, "__len__") else value
 
 
-def build_material_group(name, principled, normal_map, image_texture, lobe_images):
+@dataclass
+class AtlasLod:
+    """A material baked with MIP atlases (native write option `atlas`) and a level of detail
+    from the scene (scene_lod.py): report.json's "atlas" and the footprint constants."""
+    width: int
+    height: int
+    levels: list                 # per level {"x", "y", "width", "height"}
+    texels_per_unit: float
+    pixel_angle: float
+    pixel_size: float
+
+
+LOD_INPUTS = ("Texels per Unit", "Pixel Angle", "Pixel Size")
+
+
+def _uv_source(tree, gin, has_vector, location):
+    if has_vector:
+        return gin.outputs["Vector"]
+    coordinates = tree.nodes.new("ShaderNodeTexCoord")
+    coordinates.location = location
+    return coordinates.outputs["UV"]
+
+
+def _atlas_levels(tree, gin, name, atlas, repeat, uv):
+    """The two levels the footprint falls between: per level the taps node, and the blend factor."""
+    lod = tree.nodes.new("ShaderNodeGroup")
+    lod.node_tree = level_of_detail_group()
+    lod.location = (-2000, 400)
+    for key in LOD_INPUTS:
+        tree.links.new(gin.outputs[key], lod.inputs[key])
+    lod.inputs["Max Level"].default_value = float(len(atlas.levels) - 1)
+    level = lod.outputs["Level"]
+    low = _math(tree, "FLOOR", level, location=(-1850, 400))
+    high = _math(tree, "MINIMUM", _math(tree, "ADD", low, 1.0, location=(-1700, 500)), float(len(atlas.levels) - 1),
+                 location=(-1550, 500))
+    blend = _math(tree, "SUBTRACT", level, low, location=(-1700, 300))
+    table = atlas_table_group(name + " atlas", atlas)
+    taps = []
+    for k, index in enumerate((low, high)):
+        lookup = tree.nodes.new("ShaderNodeGroup")
+        lookup.node_tree = table
+        lookup.location = (-1550, 300 - 250 * k)
+        tree.links.new(index, lookup.inputs["Level"])
+        tap = tree.nodes.new("ShaderNodeGroup")
+        tap.node_tree = atlas_taps_group()
+        tap.location = (-1350, 300 - 250 * k)
+        tree.links.new(uv, tap.inputs["UV"])
+        for key in ("X", "Y", "W", "H"):
+            tree.links.new(lookup.outputs[key], tap.inputs[key])
+        tap.inputs["Atlas Width"].default_value = float(atlas.width)
+        tap.inputs["Atlas Height"].default_value = float(atlas.height)
+        tap.inputs["Repeat"].default_value = 1.0 if repeat else 0.0
+        taps.append(tap)
+    return taps, blend
+
+
+def _sample_atlas(tree, image, taps, blend, j, y):
+    """Lobe j's RGBA at the shading point: bilinear in each of the two levels, blended."""
+    colors, alphas = [], []
+    for k, tap in enumerate(taps):
+        bilinear = tree.nodes.new("ShaderNodeGroup")
+        bilinear.node_tree = bilinear_group()
+        bilinear.location = (-1000, y - 300 * k)
+        for i, corner in enumerate(("00", "10", "01", "11")):
+            tex = tree.nodes.new("ShaderNodeTexImage")
+            tex.name = tex.label = "Lobe %d level %s %s" % (j, "low" if k == 0 else "high", corner)
+            tex.image = image
+            tex.interpolation = "Closest"  # the taps are texel centres; filtering is done in nodes
+            tex.extension = "EXTEND"
+            tex.location = (-1250, y - 300 * k - 60 * i)
+            tex.hide = True
+            tree.links.new(tap.outputs["UV " + corner], tex.inputs["Vector"])
+            tree.links.new(tex.outputs["Color"], bilinear.inputs["Color " + corner])
+            tree.links.new(tex.outputs["Alpha"], bilinear.inputs["Alpha " + corner])
+        tree.links.new(tap.outputs["Fx"], bilinear.inputs["Fx"])
+        tree.links.new(tap.outputs["Fy"], bilinear.inputs["Fy"])
+        colors.append(bilinear.outputs["Color"])
+        alphas.append(bilinear.outputs["Alpha"])
+    return (_mix(tree, "VECTOR", blend, colors[0], colors[1], (-850, y)),
+            _mix(tree, "FLOAT", blend, alphas[0], alphas[1], (-850, y - 150)))
+
+
+def _sample_level0(tree, gin, image, image_texture, has_vector, j, y):
+    tex = tree.nodes.new("ShaderNodeTexImage")
+    tex.name = tex.label = "Lobe %d" % j
+    tex.image = image
+    # Linear, whatever the original uses: EEVEE filters (and MIP-maps) linear textures only,
+    # and the filtered look is the point. Extension and projection follow the original.
+    tex.interpolation = "Linear"
+    tex.extension = image_texture.extension
+    tex.projection = image_texture.projection
+    tex.projection_blend = image_texture.projection_blend
+    tex.location = (-1100, y)
+    if has_vector:
+        tree.links.new(gin.outputs["Vector"], tex.inputs["Vector"])
+    return tex.outputs["Color"], tex.outputs["Alpha"]
+
+
+def build_material_group(name, principled, normal_map, image_texture, lobe_images, atlas=None):
     """A group with the carried Principled inputs (+ Normal Strength, + Vector if the original
-    texture's was linked) and one BSDF output, shading through len(lobe_images) lobes."""
+    texture's was linked, + the level-of-detail constants with an atlas) and one BSDF output,
+    shading through len(lobe_images) lobes: level-0 textures that the renderer filters itself
+    (atlas None), or MIP atlases sampled at the level of detail the scene gives (AtlasLod)."""
     tree = _new_group(name)
     decode = lobe_group()
     carried = carried_inputs(principled)
@@ -241,37 +508,35 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     if has_vector:
         vector = _add_socket(tree, "INPUT", "NodeSocketVector", "Vector")
         vector.hide_value = True
+    if atlas is not None:
+        for key, value in zip(LOD_INPUTS, (atlas.texels_per_unit, atlas.pixel_angle, atlas.pixel_size)):
+            _add_socket(tree, "INPUT", "NodeSocketFloat", key).default_value = value
     _add_socket(tree, "OUTPUT", "NodeSocketShader", "BSDF")
 
     gin = tree.nodes.new("NodeGroupInput")
-    gin.location = (-1400, 0)
+    gin.location = (-2300, 0)
     gout = tree.nodes.new("NodeGroupOutput")
     count = len(lobe_images)
     gout.location = (1400 + 200 * count, 0)
     names = {s.name for s in carried}
+    if atlas is not None:
+        uv = _uv_source(tree, gin, has_vector, (-2000, 100))
+        taps, blend = _atlas_levels(tree, gin, tree.name, atlas, image_texture.extension == "REPEAT", uv)
 
     bsdfs, weights = [], []
     for j, image in enumerate(lobe_images):
         y = -900 * j
-        tex = tree.nodes.new("ShaderNodeTexImage")
-        tex.name = tex.label = "Lobe %d" % j
-        tex.image = image
-        # Linear, whatever the original uses: EEVEE filters (and MIP-maps) linear textures only,
-        # and the filtered look is the point. Extension and projection follow the original.
-        tex.interpolation = "Linear"
-        tex.extension = image_texture.extension
-        tex.projection = image_texture.projection
-        tex.projection_blend = image_texture.projection_blend
-        tex.location = (-1100, y)
-        if has_vector:
-            tree.links.new(gin.outputs["Vector"], tex.inputs["Vector"])
+        if atlas is not None:
+            color, alpha = _sample_atlas(tree, image, taps, blend, j, y)
+        else:
+            color, alpha = _sample_level0(tree, gin, image, image_texture, has_vector, j, y)
 
         dec = tree.nodes.new("ShaderNodeGroup")
         dec.node_tree = decode
         dec.name = dec.label = "Decode %d" % j
         dec.location = (-800, y)
-        tree.links.new(tex.outputs["Color"], dec.inputs["Lobe"])
-        tree.links.new(tex.outputs["Alpha"], dec.inputs["Lobe Z"])
+        tree.links.new(color, dec.inputs["Lobe"])
+        tree.links.new(alpha, dec.inputs["Lobe Z"])
         if "Roughness" in names:
             tree.links.new(gin.outputs["Roughness"], dec.inputs["Roughness"])
 
@@ -400,13 +665,16 @@ def remove_group_node(material_tree, node_name, principled_name, bypassed):
 
 
 def lobe_count(group_tree):
-    return sum(1 for n in group_tree.nodes if n.bl_idname == "ShaderNodeTexImage")
+    return len({n.image.name for n in group_tree.nodes if n.bl_idname == "ShaderNodeTexImage" and n.image})
 
 
 def remove_unused_groups(names):
     """Removes the named node groups this add-on made once nothing uses them, then the shared
     helper groups if they are unused too."""
-    for name in list(dict.fromkeys(names)) + [LOBE_GROUP, INTEGRAL_GROUP]:
+    ordered = []
+    for name in dict.fromkeys(names):
+        ordered += [name, name + " atlas"]  # the material's group, then its atlas table
+    for name in ordered + [LOBE_GROUP, INTEGRAL_GROUP, LOD_GROUP, TAPS_GROUP, BILINEAR_GROUP]:
         tree = bpy.data.node_groups.get(name)
         if tree is not None and tree.get(TAG) is not None and tree.users == 0:
             bpy.data.node_groups.remove(tree)

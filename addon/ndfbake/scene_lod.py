@@ -1,0 +1,165 @@
+"""What a scene needs of a baked material: the MIP levels its cameras reach, and the constants from
+which the node group picks a level per shading point.
+
+Cycles has no MIP levels and shader nodes see no screen derivatives (DESIGN.md), but they see the
+distance to the camera and the angle of view. The node group ("NDFB Level of Detail") computes
+
+    footprint = (d·pixel_angle + pixel_size) · texels_per_unit / sqrt(max(|cos θ|, MIN_FACING))
+    level     = clamp(log2(footprint), 0, levels − 1)
+
+the side, in texels of the normal map, of the square whose area a pixel covers on the surface:
+d is the distance to the camera; pixel_angle the angle a pixel subtends (a perspective camera)
+and pixel_size its width (an orthographic one); texels_per_unit the UV texel density from the
+library's tangent module (ndfb_texel_density, world space, times the map's size); θ the angle
+between the view ray and the surface, which stretches the footprint by 1/cos θ along one axis
+(sqrt: the geometric mean of the two axes, between the over-blur of the long axis and the
+aliasing of the short one).
+
+The same formula over the vertices of every object that renders the material, seen from every
+camera in the scene, gives the levels the bake must fit: up to the ceiling of the largest level
+plus one for the blend between two levels.
+"""
+import math
+from dataclasses import dataclass
+
+import bpy
+import numpy as np
+
+from . import native
+
+# Grazing views stretch the footprint without bound; past 1/64 (an 89° view) the extra blur is
+# capped at 8×, three levels, so that silhouettes keep some detail.
+MIN_FACING = 1.0 / 64.0
+
+
+@dataclass
+class CameraFootprint:
+    location: tuple              # world position of the camera
+    pixel_angle: float           # radians per pixel (perspective), 0 for orthographic
+    pixel_size: float            # world units per pixel (orthographic), 0 for perspective
+    clip_end: float
+
+
+@dataclass
+class MaterialLod:
+    texels_per_unit: float       # map texels per world unit on the material's surfaces
+    levels: int                  # levels the scene's cameras reach (0: no camera sees it)
+    footprint_max: float         # largest footprint in texels over the material's vertices
+
+
+def camera_footprint(scene, camera_object):
+    """The pixel footprint of a camera at the scene's render resolution."""
+    render = scene.render
+    scale = render.resolution_percentage / 100.0
+    width = max(1.0, render.resolution_x * scale * render.pixel_aspect_x)
+    height = max(1.0, render.resolution_y * scale * render.pixel_aspect_y)
+    cam = camera_object.data
+    fit = cam.sensor_fit
+    if fit == "AUTO":
+        fit = "HORIZONTAL" if width >= height else "VERTICAL"
+    pixels = width if fit == "HORIZONTAL" else height
+    location = tuple(camera_object.matrix_world.translation)
+    if cam.type == "ORTHO":
+        return CameraFootprint(location, 0.0, cam.ortho_scale / pixels, cam.clip_end)
+    sensor = cam.sensor_width if fit == "HORIZONTAL" else cam.sensor_height
+    if cam.type == "PANO":
+        # No single focal length: the angle a pixel subtends over the camera's field of view.
+        return CameraFootprint(location, 2.0 * math.pi / pixels, 0.0, cam.clip_end)
+    return CameraFootprint(location, sensor / max(cam.lens, 1e-3) / pixels, 0.0, cam.clip_end)
+
+
+def scene_cameras(scene):
+    """The footprints of every camera object in the scene, the active one first."""
+    cameras = [scene.camera] if scene.camera is not None and scene.camera.type == "CAMERA" else []
+    cameras += [o for o in scene.objects if o.type == "CAMERA" and o is not scene.camera]
+    return [camera_footprint(scene, c) for c in cameras]
+
+
+def objects_using(scene, material):
+    """Mesh-like objects the scene renders that have `material` in a slot."""
+    return [obj for obj in scene.objects
+            if not obj.hide_render and obj.type in {"MESH", "CURVE", "SURFACE", "META", "FONT"}
+            and any(slot.material == material for slot in obj.material_slots)]
+
+
+@dataclass
+class _WorldMesh:
+    positions: np.ndarray        # (n, 3) world space
+    normals: np.ndarray          # (n, 3) world space, unit
+    density: float               # UV units per world unit (ndfb_texel_density)
+    area: float                  # world area
+
+
+def _world_mesh(obj, depsgraph, uv_map):
+    evaluated = obj.evaluated_get(depsgraph)
+    mesh = evaluated.to_mesh()
+    try:
+        if mesh is None or not mesh.polygons or not mesh.uv_layers:
+            return None
+        layer = mesh.uv_layers.get(uv_map) if uv_map else None
+        layer = layer or mesh.uv_layers.active
+        nv, nl, nf = len(mesh.vertices), len(mesh.loops), len(mesh.polygons)
+        co = np.empty(nv * 3, dtype=np.float32)
+        mesh.vertices.foreach_get("co", co)
+        vn = np.empty(nv * 3, dtype=np.float32)
+        mesh.vertices.foreach_get("normal", vn)
+        sizes = np.empty(nf, dtype=np.uint32)
+        mesh.polygons.foreach_get("loop_total", sizes)
+        starts = np.empty(nf, dtype=np.int64)
+        mesh.polygons.foreach_get("loop_start", starts)
+        order = np.concatenate([np.arange(s, s + t) for s, t in zip(starts, sizes)]) if nf else np.arange(0)
+        corners = np.empty(nl, dtype=np.uint32)
+        mesh.loops.foreach_get("vertex_index", corners)
+        uvs = np.empty(nl * 2, dtype=np.float32)
+        layer.data.foreach_get("uv", uvs)
+        matrix = np.array(evaluated.matrix_world, dtype=np.float64)
+        world = co.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3]
+        normal_matrix = np.linalg.inv(matrix[:3, :3]).T if abs(np.linalg.det(matrix[:3, :3])) > 1e-12 else matrix[:3, :3]
+        normals = vn.reshape(-1, 3) @ normal_matrix.T
+        normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+        corners, uvs = corners[order], uvs.reshape(-1, 2)[order]
+        with native.load().context() as ctx:
+            density = ctx.texel_density(world.astype(np.float32), sizes, corners, normals.astype(np.float32), uvs)
+        mesh.calc_loop_triangles()
+        tris = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int64)
+        mesh.loop_triangles.foreach_get("vertices", tris)
+        tri = world[tris.reshape(-1, 3)]
+        area = 0.5 * float(np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum())
+        return _WorldMesh(world, normals, density, area)
+    finally:
+        evaluated.to_mesh_clear()
+
+
+def footprints(positions, normals, camera, texels_per_unit):
+    """The footprint in texels at each vertex seen from `camera` (NaN behind the camera)."""
+    offset = positions - np.asarray(camera.location)
+    distance = np.minimum(np.linalg.norm(offset, axis=1), camera.clip_end)
+    facing = np.abs(np.einsum("ij,ij->i", offset, normals)) / np.maximum(distance, 1e-9)
+    footprint = (distance * camera.pixel_angle + camera.pixel_size) * texels_per_unit
+    return footprint / np.sqrt(np.maximum(facing, MIN_FACING))
+
+
+def level_count(width, height):
+    return int(math.floor(math.log2(max(width, height, 1)))) + 1
+
+
+def material_lod(scene, material, image_size, uv_map=""):
+    """Texel density and the levels the scene's cameras reach, for a map of image_size (w, h)."""
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    meshes = [m for m in (_world_mesh(obj, depsgraph, uv_map) for obj in objects_using(scene, material)) if m]
+    side = math.sqrt(max(1, image_size[0]) * max(1, image_size[1]))
+    all_levels = level_count(*image_size)
+    area = sum(m.area for m in meshes)
+    if not meshes or area <= 0.0:
+        return MaterialLod(texels_per_unit=0.0, levels=all_levels, footprint_max=float("nan"))
+    # One density per material: the node group sees no object; weight each mesh by its area.
+    uv_per_unit = sum(m.density * m.area for m in meshes) / area
+    texels_per_unit = uv_per_unit * side
+    cameras = scene_cameras(scene)
+    if not cameras:
+        return MaterialLod(texels_per_unit, all_levels, float("nan"))
+    largest = max(float(np.max(footprints(m.positions, m.normals, c, texels_per_unit)))
+                  for m in meshes for c in cameras)
+    # Levels up to ceil(log2(largest)), plus the next one for the blend between two levels.
+    needed = int(math.ceil(math.log2(max(largest, 1.0)))) + 2
+    return MaterialLod(texels_per_unit, max(1, min(all_levels, needed)), largest)
