@@ -338,9 +338,11 @@ def summarize(report, seconds, lobes):
         values = [v for v in values if v is not None]
         return sum(values) / len(values) if values else float("nan")
 
-    return ("%d lobe%s, %d levels, lobes per texel by level: %s; error %.3f (single vMF %.3f, Toksvig %.3f); %.1f s"
+    return ("%d lobe%s, %d levels, lobes per texel by level: %s; error %.3f (naive normal map %.3f, single vMF "
+            "%.3f, Toksvig %.3f); %.1f s"
             % (lobes, "" if lobes == 1 else "s", len(levels), " ".join("%.1f" % m for m in means),
-               mean_of("error"), mean_of("error_single_vmf"), mean_of("error_toksvig"), seconds))
+               mean_of("error"), mean_of("error_naive"), mean_of("error_single_vmf"), mean_of("error_toksvig"),
+               seconds))
 
 
 def finish(job):

@@ -49,7 +49,7 @@ TEST_F(BakeApi, WritesSelfDescribingLobeTexturesAndAReport)
         }
     std::ifstream report(out + "/report.json");
     const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
-    for (const char* key : {"\"levels\"", "\"lobe_histogram\"", "\"error_toksvig\"", "\"timings_seconds\"", "\"repairs\""})
+    for (const char* key : {"\"levels\"", "\"lobe_histogram\"", "\"error_toksvig\"", "\"error_naive\"", "\"timings_seconds\"", "\"repairs\""})
         EXPECT_NE(text.find(key), std::string::npos) << key;
     // Only our files: no staging folder or temporary left.
     for (const std::string& entry : listing(out)) EXPECT_EQ(entry.find(".ndfbake"), std::string::npos) << entry;

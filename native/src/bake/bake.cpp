@@ -227,6 +227,7 @@ std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded,
         write_summary(json, "error", s.fit);
         write_summary(json, "error_without_alignment", s.independent_fit);
         json.value("alignment_cost", double(s.fit.mean) - double(s.independent_fit.mean));
+        write_summary(json, "error_naive", s.naive);
         write_summary(json, "error_single_vmf", s.single_vmf);
         write_summary(json, "error_toksvig", s.toksvig);
         json.end_object();

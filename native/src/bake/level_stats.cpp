@@ -43,7 +43,7 @@ LevelStats measure_level(const LobePyramid& pyramid, int level, const BaseBrdf& 
 
     const std::vector<Vec3> directions = fibonacci_hemisphere(error_direction_count(brdf));
     const int64_t measured = max_texels > 0 ? std::min<int64_t>(max_texels, texels) : texels;
-    std::vector<float> fit_errors, independent_errors, single_errors, toksvig_errors;
+    std::vector<float> fit_errors, independent_errors, naive_errors, single_errors, toksvig_errors;
     std::vector<WeightedNormal> samples, all_samples;
     std::vector<VmfLobe> children, child(static_cast<size_t>(pyramid.slots));
     for (int64_t i = 0; i < measured; ++i) {
@@ -54,6 +54,8 @@ LevelStats measure_level(const LobePyramid& pyramid, int level, const BaseBrdf& 
         fit_errors.push_back(meter.error(pyramid.texel_lobes(level, x, y)));
         const VmfLobe single = single_vmf_lobe(samples), toksvig = toksvig_lobe(samples);
         single_errors.push_back(meter.error(std::span(&single, 1)));
+        const VmfLobe naive{1.0f, single.mu, kKappaMax};  // the renormalized mean, unwidened
+        naive_errors.push_back(meter.error(std::span(&naive, 1)));
         toksvig_errors.push_back(meter.error(std::span(&toksvig, 1)));
         if (measure_alignment && level > 0) {
             gather_footprint(pyramid.source, level, x, y, pyramid.wrap, all_samples);
@@ -69,6 +71,7 @@ LevelStats measure_level(const LobePyramid& pyramid, int level, const BaseBrdf& 
     stats.measured_texels = int(measured);
     stats.fit = summarize(fit_errors);
     stats.independent_fit = summarize(independent_errors);
+    stats.naive = summarize(naive_errors);
     stats.single_vmf = summarize(single_errors);
     stats.toksvig = summarize(toksvig_errors);
     return stats;

@@ -29,6 +29,7 @@ struct LevelStats {
     int measured_texels = 0;
     ErrorSummary fit;                // the pyramid's (aligned) lobes
     ErrorSummary independent_fit;    // the same budget without alignment: alignment's cost
+    ErrorSummary naive;              // plain MIP-mapping: the base BRDF about the mean normal
     ErrorSummary single_vmf;
     ErrorSummary toksvig;
 };
