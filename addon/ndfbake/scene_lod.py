@@ -54,14 +54,16 @@ def camera_footprint(scene, camera_object):
     width = max(1.0, render.resolution_x * scale * render.pixel_aspect_x)
     height = max(1.0, render.resolution_y * scale * render.pixel_aspect_y)
     cam = camera_object.data
-    fit = cam.sensor_fit
-    if fit == "AUTO":
-        fit = "HORIZONTAL" if width >= height else "VERTICAL"
-    pixels = width if fit == "HORIZONTAL" else height
+    # AUTO spans the sensor width (and the orthographic scale) over the larger side.
+    if cam.sensor_fit == "AUTO":
+        sensor, pixels = cam.sensor_width, max(width, height)
+    elif cam.sensor_fit == "HORIZONTAL":
+        sensor, pixels = cam.sensor_width, width
+    else:
+        sensor, pixels = cam.sensor_height, height
     location = tuple(camera_object.matrix_world.translation)
     if cam.type == "ORTHO":
         return CameraFootprint(location, 0.0, cam.ortho_scale / pixels, cam.clip_end)
-    sensor = cam.sensor_width if fit == "HORIZONTAL" else cam.sensor_height
     if cam.type == "PANO":
         # No single focal length: the angle a pixel subtends over the camera's field of view.
         return CameraFootprint(location, 2.0 * math.pi / pixels, 0.0, cam.clip_end)

@@ -1,0 +1,263 @@
+"""Level of detail from the scene (addon/ndfbake/scene_lod.py and the node groups that use it).
+
+Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_lod.py -- LIB
+
+- camera_footprint: the pixel angle of perspective cameras (both sensor fits) and the pixel size of
+  orthographic ones, against the pinhole formula worked by hand.
+- material_lod: texel density of a plane with known UVs and the levels a camera reaches.
+- The "NDFB Level of Detail" node group, rendered by Cycles as an emission, equals the footprint
+  formula evaluated per pixel from the camera's intrinsics (independent of scene_lod's numpy).
+- The atlas path (table, taps, four Closest lookups, bilinear in nodes) renders exactly what Cycles'
+  own bilinear (Linear) lookup of the level's file renders, with repeat across tile borders.
+- A bake with a camera writes only the levels the camera reaches, and one atlas per lobe.
+"""
+import math
+import os
+import sys
+
+import bpy
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import test_addon_helpers as h  # noqa: E402
+
+
+def _camera(location=(0.0, 0.0, 10.0), rotation=(0.0, 0.0, 0.0), lens=50.0, kind="PERSP"):
+    bpy.ops.object.camera_add(location=location, rotation=rotation)
+    camera = bpy.context.active_object
+    camera.data.type = kind
+    camera.data.lens = lens
+    camera.data.sensor_width = 36.0
+    camera.data.sensor_height = 24.0
+    bpy.context.scene.camera = camera
+    return camera
+
+
+def _resolution(width, height):
+    render = bpy.context.scene.render
+    render.resolution_x, render.resolution_y, render.resolution_percentage = width, height, 100
+
+
+def test_camera_footprint_is_the_pinhole_pixel_angle():
+    from ndfbake import scene_lod
+    h.reset_scene()
+    scene = bpy.context.scene
+    camera = _camera(lens=50.0)
+    _resolution(200, 100)
+    f = scene_lod.camera_footprint(scene, camera)
+    h.expect(abs(f.pixel_angle - 36.0 / 50.0 / 200.0) < 1e-9 and f.pixel_size == 0.0, "horizontal fit: %r" % (f,))
+    _resolution(100, 200)  # AUTO fits the larger side: now the height
+    f = scene_lod.camera_footprint(scene, camera)
+    h.expect(abs(f.pixel_angle - 36.0 / 50.0 / 200.0) < 1e-9, "auto fit on the height: %r" % (f,))
+    camera.data.sensor_fit = "VERTICAL"
+    f = scene_lod.camera_footprint(scene, camera)
+    h.expect(abs(f.pixel_angle - 24.0 / 50.0 / 200.0) < 1e-9, "vertical fit: %r" % (f,))
+    scene.render.resolution_percentage = 50
+    f = scene_lod.camera_footprint(scene, camera)
+    h.expect(abs(f.pixel_angle - 24.0 / 50.0 / 100.0) < 1e-9, "50%% resolution: %r" % (f,))
+    camera.data.type = "ORTHO"
+    camera.data.ortho_scale = 7.0
+    camera.data.sensor_fit = "AUTO"
+    f = scene_lod.camera_footprint(scene, camera)
+    h.expect(f.pixel_angle == 0.0 and abs(f.pixel_size - 7.0 / 100.0) < 1e-9, "orthographic: %r" % (f,))
+
+
+def test_material_lod_measures_texel_density_and_the_levels_reached():
+    from ndfbake import scene_lod
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory, pattern="bumps", size=64)  # plane of side 2, UVs 0..1
+        scene = bpy.context.scene
+        plane = bpy.data.objects["Plane"]
+        plane.scale = (3.0, 3.0, 3.0)  # world side 6: 64 / 6 texels per unit
+        _resolution(100, 100)
+        camera = _camera(location=(0.0, 0.0, 40.0), lens=50.0)
+        lod = scene_lod.material_lod(scene, material, (64, 64))
+        print("  texels per unit %.4f, levels %d, largest footprint %.3f" % (
+            lod.texels_per_unit, lod.levels, lod.footprint_max))
+        h.expect(abs(lod.texels_per_unit - 64.0 / 6.0) < 1e-3, "texel density %r" % lod.texels_per_unit)
+        # The far corners: distance sqrt(40² + 2·3²), facing 40 / distance.
+        distance = math.sqrt(40.0 ** 2 + 18.0)
+        footprint = distance * 36.0 / 50.0 / 100.0 * 64.0 / 6.0 / math.sqrt(40.0 / distance)
+        h.expect(abs(lod.footprint_max - footprint) < 1e-3 * footprint, "footprint %r vs %r" % (
+            lod.footprint_max, footprint))
+        h.expect(lod.levels == min(7, math.ceil(math.log2(footprint)) + 2), "levels %d" % lod.levels)
+        camera.location = (0.0, 0.0, 4.0)  # close: one texel per pixel or more; two levels
+        h.expect(scene_lod.material_lod(scene, material, (64, 64)).levels == 2, "close camera")
+        plane.hide_render = True
+        lod = scene_lod.material_lod(scene, material, (64, 64))
+        h.expect(lod.texels_per_unit == 0.0 and lod.levels == 7, "no visible object: %r" % (lod,))
+    finally:
+        h.cleanup(directory)
+
+
+def _emission_material(name):
+    material = bpy.data.materials.new(name)
+    material.use_nodes = True
+    tree = material.node_tree
+    tree.nodes.remove(tree.nodes["Principled BSDF"])
+    emission = tree.nodes.new("ShaderNodeEmission")
+    tree.links.new(emission.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+    return material, tree, emission
+
+
+def _render_cycles(path, width, height):
+    scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = 1
+    scene.cycles.use_denoising = False
+    scene.cycles.filter_width = 0.01  # one ray through each pixel's centre
+    scene.cycles.pixel_filter_type = "BOX"
+    scene.cycles.use_adaptive_sampling = False
+    scene.view_settings.view_transform = "Standard"
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.image_settings.color_depth = "32"
+    scene.render.filepath = path
+    _resolution(width, height)
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(path)
+    pixels = np.empty(width * height * 4, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    bpy.data.images.remove(image)
+    return pixels.reshape(height, width, 4)  # rows bottom-up
+
+
+def test_the_level_of_detail_group_renders_the_footprint_formula():
+    from ndfbake import nodes
+    h.reset_scene()
+    directory = h.temp_dir()
+    try:
+        width, height, lens, depth = 48, 32, 18.0, 5.0  # wide angle: the view angle varies a lot
+        bpy.ops.mesh.primitive_plane_add(size=100.0, location=(0.0, 0.0, -depth))
+        plane = bpy.context.active_object
+        material, tree, emission = _emission_material("Level")
+        plane.data.materials.append(material)
+        _camera(location=(0.0, 0.0, 0.0), lens=lens)
+        lod = tree.nodes.new("ShaderNodeGroup")
+        lod.node_tree = nodes.level_of_detail_group()
+        pixel_angle = 36.0 / lens / width
+        texels_per_unit = 300.0
+        lod.inputs["Texels per Unit"].default_value = texels_per_unit
+        lod.inputs["Pixel Angle"].default_value = pixel_angle
+        lod.inputs["Pixel Size"].default_value = 0.0
+        lod.inputs["Max Level"].default_value = 20.0
+        scale = tree.nodes.new("ShaderNodeMath")
+        scale.operation = "DIVIDE"
+        scale.inputs[1].default_value = 16.0
+        tree.links.new(lod.outputs["Level"], scale.inputs[0])
+        tree.links.new(scale.outputs[0], emission.inputs["Color"])
+        bpy.context.scene.world = None
+        rendered = _render_cycles(os.path.join(directory, "level.exr"), width, height)[..., 0] * 16.0
+        # Pinhole: pixel (i, j) centre at sensor (x, y) = ((i + ½) − W/2, (j + ½) − H/2)·36/W mm.
+        i, j = np.meshgrid(np.arange(width) + 0.5, np.arange(height) + 0.5)
+        x, y = (i - width / 2.0) * 36.0 / width, (j - height / 2.0) * 36.0 / width
+        length = np.sqrt(x * x + y * y + lens * lens)
+        distance, facing = depth * length / lens, lens / length
+        expected = np.clip(np.log2(distance * pixel_angle * texels_per_unit / np.sqrt(facing)), 0.0, 20.0)
+        error = np.abs(rendered - expected)
+        print("  level %.3f..%.3f, largest difference %.2e" % (expected.min(), expected.max(), error.max()))
+        h.expect(expected.max() - expected.min() > 0.3, "the view angle should change the level")
+        h.expect(error.max() < 2e-3, "level differs from the formula by %.4f" % error.max())
+    finally:
+        h.cleanup(directory)
+
+
+def test_atlas_lookups_equal_bilinear_filtering_of_the_level_files():
+    from ndfbake import nodes
+    h.reset_scene()
+    directory = h.temp_dir()
+    try:
+        from ndfbake import native
+        normal_map = h.write_normal_map(os.path.join(directory, "weave.png"), pattern="weave", size=32)
+        out = os.path.join(directory, "lobes")
+        with native.load().context() as ctx:
+            ctx.bake(normal_map, out, max_lobes=2, roughness=0.3, atlas=True)
+        import json
+        with open(os.path.join(out, "report.json")) as f:
+            layout = json.load(f)["atlas"]
+        atlas_image = bpy.data.images.load(os.path.join(out, "atlas_lobe1.exr"))
+        atlas_image.colorspace_settings.name = "Non-Color"
+        atlas = nodes.AtlasLod(layout["width"], layout["height"], layout["levels"], 1.0, 0.0, 0.0)
+
+        # A plane seen from above by an orthographic camera; UVs 0..2.5 so the texture tiles.
+        bpy.ops.mesh.primitive_plane_add(size=2.0)
+        plane = bpy.context.active_object
+        for loop in plane.data.uv_layers.active.data:
+            loop.uv = (loop.uv[0] * 2.5 - 0.3, loop.uv[1] * 2.5 - 0.7)
+        camera = _camera(location=(0.0, 0.0, 5.0), kind="ORTHO")
+        camera.data.ortho_scale = 2.0
+        bpy.context.scene.world = None
+        worst = 0.0
+        for level in (0, 1, 3):
+            material, tree, emission = _emission_material("Atlas %d" % level)
+            plane.data.materials.clear()
+            plane.data.materials.append(material)
+            uv = tree.nodes.new("ShaderNodeTexCoord").outputs["UV"]
+            table = tree.nodes.new("ShaderNodeGroup")
+            table.node_tree = nodes.atlas_table_group("table %d" % level, atlas)
+            table.inputs["Level"].default_value = float(level)
+            taps = tree.nodes.new("ShaderNodeGroup")
+            taps.node_tree = nodes.atlas_taps_group()
+            tree.links.new(uv, taps.inputs["UV"])
+            for key in ("X", "Y", "W", "H"):
+                tree.links.new(table.outputs[key], taps.inputs[key])
+            taps.inputs["Atlas Width"].default_value = float(atlas.width)
+            taps.inputs["Atlas Height"].default_value = float(atlas.height)
+            taps.inputs["Repeat"].default_value = 1.0
+            color, _alpha = nodes._sample_atlas(tree, atlas_image, [taps, taps], 0.0, 0, 0)
+            tree.links.new(color, emission.inputs["Color"])
+            ours = _render_cycles(os.path.join(directory, "atlas%d.exr" % level), 64, 64)[..., :3]
+
+            plain, tree, emission = _emission_material("Level %d" % level)
+            plane.data.materials.clear()
+            plane.data.materials.append(plain)
+            tex = tree.nodes.new("ShaderNodeTexImage")
+            tex.image = bpy.data.images.load(os.path.join(out, "level%02d_lobe1.exr" % level))
+            tex.image.colorspace_settings.name = "Non-Color"
+            tex.interpolation = "Linear"
+            tex.extension = "REPEAT"
+            tree.links.new(tex.outputs["Color"], emission.inputs["Color"])
+            theirs = _render_cycles(os.path.join(directory, "level%d.exr" % level), 64, 64)[..., :3]
+            difference = float(np.abs(ours - theirs).max())
+            worst = max(worst, difference)
+            print("  level %d: largest difference %.2e (values up to %.3f)" % (
+                level, difference, float(np.abs(theirs).max())))
+            h.expect(float(np.abs(theirs).max()) > 0.05, "level %d renders black" % level)
+        h.expect(worst < 2e-3, "the atlas lookups differ from bilinear filtering by %.4f" % worst)
+    finally:
+        h.cleanup(directory)
+
+
+def test_a_bake_with_a_camera_writes_only_the_levels_it_reaches():
+    from ndfbake import bake, nodes
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory, pattern="fbm", size=128)
+        _resolution(64, 64)
+        _camera(location=(0.0, 0.0, 6.0), lens=50.0)  # the plane's 128 texels over ~36 pixels
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        files = sorted(os.listdir(bpy.path.abspath(result.folder)))
+        levels = sorted({int(name[5:7]) for name in files if name.startswith("level")})
+        print("  %s\n  files: %s" % (result.summary, " ".join(files)))
+        h.expect(files.count("atlas_lobe0.exr") == 1 and files.count("atlas_lobe1.exr") == 1, "atlases: %s" % files)
+        h.expect(levels == list(range(len(levels))) and 2 <= len(levels) < 8, "levels written: %s" % levels)
+        h.expect("level of detail from the camera" in result.summary, result.summary)
+        group = material.node_tree.nodes["ndfbake"]
+        h.expect(abs(group.inputs["Texels per Unit"].default_value - 64.0) < 0.01, "texel density on the node")
+        h.expect(nodes.lobe_count(group.node_tree) == 2, "two lobes")
+        bake.revert(material)
+        h.expect(not os.path.exists(bpy.path.abspath(result.folder)), "revert left the folder")
+        leftovers = [g.name for g in bpy.data.node_groups]
+        h.expect(not leftovers, "revert left node groups: %s" % leftovers)
+    finally:
+        h.cleanup(directory)
+
+
+if __name__ == "__main__":
+    h.import_addon()
+    h.run([test_camera_footprint_is_the_pinhole_pixel_angle,
+           test_material_lod_measures_texel_density_and_the_levels_reached,
+           test_the_level_of_detail_group_renders_the_footprint_formula,
+           test_atlas_lookups_equal_bilinear_filtering_of_the_level_files,
+           test_a_bake_with_a_camera_writes_only_the_levels_it_reaches])
