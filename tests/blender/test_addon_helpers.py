@@ -160,6 +160,22 @@ def dump_material(material):
     return data
 
 
+def differences(before, after, path="", limit=8):
+    """Where two dumps differ, as readable paths (at most `limit`)."""
+    found = []
+    if isinstance(before, dict) and isinstance(after, dict):
+        for key in sorted(set(before) | set(after), key=str):
+            if key not in before or key not in after:
+                found.append("%s/%s only %s" % (path, key, "after" if key in after else "before"))
+            elif before[key] != after[key]:
+                found += differences(before[key], after[key], "%s/%s" % (path, key), limit)
+            if len(found) >= limit:
+                break
+    elif before != after:
+        found.append("%s: %r -> %r" % (path, before, after))
+    return found[:limit]
+
+
 def data_counts():
     return {"images": sorted(i.name for i in bpy.data.images),
             "node_groups": sorted(g.name for g in bpy.data.node_groups),

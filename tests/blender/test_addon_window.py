@@ -12,6 +12,8 @@ Steps, driven by bpy.app.timers from Blender's own event loop:
    scrolled to the ndfbake panel) goes to OUTDIR.
 3. A re-bake with other settings is started and an Esc press is simulated while the worker fits:
    the bake stops, the previous bake's files and nodes are untouched.
+4. Ctrl-Z (ed.undo, as the key does) after the bake restores the material as it was before the
+   bake, and Ctrl-Shift-Z (ed.redo) brings the baked material back.
 The worker is held at its first "fit" progress call until the main thread has seen what it
 checks (a gate in BakeJob.run), so the test does not race the fit on a loaded machine.
 The process exits 0 when every check holds, 1 otherwise (printed).
@@ -104,7 +106,11 @@ def _tick():
         bpy.context.view_layer.objects.active = obj
         obj.select_set(True)
         bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "scene.blend"))
-        _properties_area()[1].tag_redraw()
+        window, area, region = _properties_area()
+        with bpy.context.temp_override(window=window, area=area, region=region):
+            bpy.ops.ed.undo_push(message="ndfbake test scene")  # what Ctrl-Z returns to
+        state["unbaked"] = h.dump_material(material)
+        area.tag_redraw()
         state["step"] = "invoke"
         return 0.5  # the Properties editor picks up the active object's material when it redraws
     elif step == "invoke":
@@ -122,6 +128,7 @@ def _tick():
             return 0.05
         material = bpy.data.materials["Window"]
         h.expect(bake.is_baked(material), "the modal bake did not bake the material")
+        state["baked_dump"] = h.dump_material(material)
         h.expect(state["ticks_while_fitting"] >= 5, "the UI loop did not run during the bake")
         _properties_area()[1].tag_redraw()
         state["step"] = "screenshot"
@@ -186,7 +193,23 @@ def _tick():
         files_after = _snapshot(state["dir"])
         h.expect(files_after == files_before, "the cancelled re-bake changed files: %s" % sorted(
             name for name in set(files_before) | set(files_after) if files_before.get(name) != files_after.get(name)))
-        _finish(True, "modal bake, screenshot and Esc cancel work (%d UI ticks)" % state["ticks"])
+        state["step"] = "undo"
+    elif step == "undo":
+        window, area, region = _properties_area()
+        with bpy.context.temp_override(window=window, area=area, region=region):
+            h.expect(bpy.ops.ed.undo() == {"FINISHED"}, "Ctrl-Z did nothing")
+        material = bpy.data.materials["Window"]
+        h.expect(not bake.is_baked(material), "Ctrl-Z left the material baked")
+        now = h.dump_material(material)
+        h.expect(now == state["unbaked"], "Ctrl-Z did not restore the material exactly: %s"
+                 % h.differences(state["unbaked"], now))
+        with bpy.context.temp_override(window=window, area=area, region=region):
+            h.expect(bpy.ops.ed.redo() == {"FINISHED"}, "Ctrl-Shift-Z did nothing")
+        material = bpy.data.materials["Window"]
+        h.expect(bake.is_baked(material) and h.dump_material(material) == state["baked_dump"],
+                 "Ctrl-Shift-Z did not bring the bake back")
+        print("Ctrl-Z restored the unbaked material; Ctrl-Shift-Z the baked one", flush=True)
+        _finish(True, "modal bake, screenshot, Esc cancel and undo work (%d UI ticks)" % state["ticks"])
     return 0.05
 
 
