@@ -104,8 +104,14 @@ def settings_from_material(material):
 
 # ---- step 1: prepare ------------------------------------------------------------------------------
 
-def prepare(material, settings=None):
-    """Checks the material and the library; returns a BakeJob or raises BakeError. Changes nothing."""
+PENDING_SUFFIX = ".pending"
+
+
+def prepare(material, settings=None, pending=False):
+    """Checks the material and the library; returns a BakeJob or raises BakeError. Changes nothing.
+    pending: the native bake writes into a sibling folder '<lobe folder>.pending' that finish()
+    moves into place, so that several bakes can all be cancelled before any changes a file
+    (bake_all); discard_pending() throws one away."""
     settings = settings or BakeSettings()
     lib, message = native.status()
     if lib is None:
@@ -136,7 +142,8 @@ def prepare(material, settings=None):
             lod = LodPlan(levels=needs.levels, texels_per_unit=needs.texels_per_unit,
                           pixel_angle=camera.pixel_angle, pixel_size=camera.pixel_size,
                           footprint_max=needs.footprint_max)
-    return BakeJob(material_name=material.name, image_path=scan.image_path, folder=relative, out_dir=absolute,
+    return BakeJob(material_name=material.name, image_path=scan.image_path, folder=relative,
+                   out_dir=absolute + PENDING_SUFFIX if pending else absolute, final_dir=absolute,
                    wrap=native.WRAP_REPEAT if scan.wrap == "REPEAT" else native.WRAP_CLAMP,
                    roughness=min(max(scan.roughness, 0.01), 1.0), settings=settings,
                    targets=[(t.principled, t.normal_map, t.image_texture) for t in scan.targets], lod=lod)
@@ -159,11 +166,13 @@ class BakeJob:
     """The native part of a bake. run() works on any thread; start()/cancel()/done/progress let
     a modal operator drive it from Blender's main thread."""
 
-    def __init__(self, material_name, image_path, folder, out_dir, wrap, roughness, settings, targets, lod=None):
+    def __init__(self, material_name, image_path, folder, out_dir, final_dir, wrap, roughness, settings, targets,
+                 lod=None):
         self.material_name = material_name
         self.image_path = image_path
         self.folder = folder
-        self.out_dir = out_dir
+        self.out_dir = out_dir   # where the library writes; final_dir unless the job is pending
+        self.final_dir = final_dir
         self.wrap = wrap
         self.roughness = roughness
         self.settings = settings
@@ -270,6 +279,32 @@ def _bake_error(error, job):
     return BakeError("NATIVE_ERROR", "%s (%s)" % (error.message, error.status_name))
 
 
+def _commit_pending(job):
+    """Moves a pending job's files into its lobe folder, file by file (each an atomic rename),
+    removing the previous bake's files that the new one does not have."""
+    if job.out_dir == job.final_dir:
+        return
+    try:
+        os.makedirs(job.final_dir, exist_ok=True)
+        fresh = set(os.listdir(job.out_dir))
+        for name in os.listdir(job.final_dir):
+            if _is_bake_file(name) and name not in fresh:
+                os.remove(os.path.join(job.final_dir, name))
+        for name in fresh:
+            os.replace(os.path.join(job.out_dir, name), os.path.join(job.final_dir, name))
+        os.rmdir(job.out_dir)
+    except OSError as e:
+        raise BakeError("OUTPUT_NOT_WRITABLE", "cannot move the lobe textures of '%s' into %s: %s"
+                        % (job.material_name, job.final_dir, e.strerror)) from None
+    job.out_dir = job.final_dir
+
+
+def discard_pending(job):
+    """Deletes what a pending job wrote (nothing else: only its own files in its own folder)."""
+    if job.out_dir != job.final_dir and os.path.isdir(job.out_dir):
+        _delete_bake_files(job.out_dir, os.listdir(job.out_dir))
+
+
 def _remove_empty_folder(path):
     try:
         os.rmdir(path)
@@ -346,8 +381,9 @@ def summarize(report, seconds, lobes):
 
 
 def finish(job):
-    """After a successful run(): loads the level-0 lobe textures, builds the node group, bypasses
-    the Principled BSDF(s) and stores the bake record. Replaces a previous bake's nodes."""
+    """After a successful run(): moves a pending job's files into place, loads the lobe textures,
+    builds the node group, bypasses the Principled BSDF(s) and stores the bake record. Replaces a
+    previous bake's nodes."""
     if job.error is not None:
         raise job.error
     material = bpy.data.materials.get(job.material_name)
@@ -358,6 +394,7 @@ def finish(job):
         if any(tree.nodes.get(n) is None for n in (principled, normal_map, texture)):
             raise BakeError("MATERIAL_CHANGED", "the nodes of '%s' changed during the bake; bake again"
                             % material.name)
+    _commit_pending(job)
     paths = _lobe_textures(job.out_dir, job.lod is not None)
     if not paths:
         raise BakeError("NATIVE_ERROR", "the bake wrote no lobe texture into %s" % job.out_dir)

@@ -5,7 +5,9 @@
   bake on a worker thread and polls it from a modal timer: progress in the window manager's
   progress bar and the status bar, Esc cancels (the library's progress callback returns non-zero
   and the bake stops, leaving no file and no changed node). bpy is touched on the main thread only.
-- ndfbake.bake_all: every material the scene needs (bake.materials_needing_bake), synchronously.
+- ndfbake.bake_all: every material the scene needs (bake.materials_needing_bake); from a script,
+  one after another on the calling thread; from the UI, modal like ndfbake.bake, every native bake
+  into a pending folder and all finished together, so that Esc leaves every material as it was.
 - ndfbake.revert: undoes the bake of the active material (or `material=`).
 Failures are reported as one ERROR line each; from Python, bpy.ops raises RuntimeError then.
 """
@@ -28,16 +30,144 @@ def _material(context, name):
     return material
 
 
-class NDFBAKE_OT_bake(bpy.types.Operator):
+def _report_outcomes(operator, outcomes):
+    """One INFO line per baked material, one ERROR line per failure; FINISHED if any succeeded."""
+    failed = [(name, o) for name, o in outcomes if isinstance(o, bake.BakeError)]
+    for name, outcome in outcomes:
+        if not isinstance(outcome, bake.BakeError):
+            operator.report({"INFO"}, "ndfbake: %s: %s" % (name, outcome.summary))
+    for name, error in failed:
+        operator.report({"ERROR"}, "ndfbake: " + error.message)
+    return {"FINISHED"} if len(failed) < len(outcomes) else {"CANCELLED"}
+
+
+class _ModalBakes:
+    """Bakes a list of materials from the UI: each native bake on a worker thread, polled from a
+    modal timer, with progress in the progress bar and the status bar; Esc cancels. With several
+    materials the bakes are pending (bake.prepare(pending=True)) and finished together at the end,
+    so that Esc at any point leaves every material and file as it was."""
+
+    _timer = None
+    _jobs = None      # prepared jobs still to run, in order
+    _done = None      # jobs whose native bake succeeded, waiting for finish()
+    _outcomes = None  # (material name, BakeResult or BakeError)
+    _job = None
+    _count = 0
+
+    def start_bakes(self, context, materials):
+        global running_job
+        if running_job is not None:
+            self.report({"WARNING"}, "ndfbake: a bake is already running (Esc cancels it)")
+            return {"CANCELLED"}
+        pending = len(materials) > 1
+        self._jobs, self._done, self._outcomes = [], [], []
+        for material in materials:
+            try:
+                self._jobs.append(bake.prepare(material, bake.settings_from_material(material), pending=pending))
+            except bake.BakeError as e:
+                self._outcomes.append((material.name, e))
+        if not self._jobs:
+            return _report_outcomes(self, self._outcomes)
+        self._count = len(self._jobs)
+        self._next_job()
+        wm = context.window_manager
+        wm.progress_begin(0, 100)
+        self._timer = wm.event_timer_add(0.1, window=context.window)
+        wm.modal_handler_add(self)
+        self._status(context)
+        return {"RUNNING_MODAL"}
+
+    def _next_job(self):
+        global running_job
+        self._job = running_job = self._jobs.pop(0)
+        self._job.start()
+
+    def _fraction(self):
+        finished = self._count - len(self._jobs) - 1
+        return (finished + self._job.fraction) / self._count
+
+    def _status(self, context):
+        job = self._job
+        which = " (%d of %d)" % (self._count - len(self._jobs), self._count) if self._count > 1 else ""
+        text = "ndfbake: baking '%s'%s: %s %d%%%s" % (job.material_name, which, job.stage or "starting",
+                                                     int(job.fraction * 100), ", cancelling" if job.cancelled
+                                                     else " (Esc to cancel)")
+        if context.workspace is not None:
+            context.workspace.status_text_set(text)
+        context.window_manager.progress_update(int(self._fraction() * 100))
+        for area in context.screen.areas if context.screen else ():
+            if area.type == "PROPERTIES":
+                area.tag_redraw()
+
+    def _end(self, context):
+        global running_job
+        wm = context.window_manager
+        if self._timer is not None:
+            wm.event_timer_remove(self._timer)
+            self._timer = None
+        wm.progress_end()
+        if context.workspace is not None:
+            context.workspace.status_text_set(None)
+        running_job = None
+
+    def _discard(self):
+        for job in self._done:
+            bake.discard_pending(job)
+        self._done = []
+
+    def modal(self, context, event):
+        job = self._job
+        if event.type == "ESC" and event.value == "PRESS":
+            job.cancel()
+            self._jobs = []  # and the ones not started
+            self._status(context)
+            return {"RUNNING_MODAL"}
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}
+        if not job.done:
+            self._status(context)
+            return {"PASS_THROUGH"}
+        job.join()
+        if job.error is not None and job.error.code == "CANCELLED":
+            self._discard()
+            self._end(context)
+            self.report({"INFO"}, "ndfbake: " + job.error.message + (
+                "; no other material changed either" if self._count > 1 else ""))
+            return {"CANCELLED"}
+        if job.error is not None:
+            self._outcomes.append((job.material_name, job.error))
+        else:
+            self._done.append(job)
+        if self._jobs:
+            self._next_job()
+            self._status(context)
+            return {"PASS_THROUGH"}
+        self._end(context)
+        for done in self._done:
+            try:
+                self._outcomes.append((done.material_name, bake.finish(done)))
+            except bake.BakeError as e:
+                bake.discard_pending(done)
+                self._outcomes.append((done.material_name, e))
+        self._done = []
+        return _report_outcomes(self, self._outcomes)
+
+    def cancel(self, context):
+        # Blender ends the modal operator (a file is loaded, the window closes): stop the bakes.
+        if self._job is not None:
+            self._job.cancel()
+            self._job.join()
+        self._discard()
+        self._end(context)
+
+
+class NDFBAKE_OT_bake(_ModalBakes, bpy.types.Operator):
     bl_idname = "ndfbake.bake"
     bl_label = "Bake"
     bl_description = "Fit the normal map's lobes and shade the material through them (Esc cancels)"
     bl_options = {"REGISTER", "UNDO"}
 
     material: StringProperty(name="Material", description="Material to bake; empty: the active material")
-
-    _timer = None
-    _job = None
 
     def execute(self, context):
         material = _material(context, self.material)
@@ -54,96 +184,31 @@ class NDFBAKE_OT_bake(bpy.types.Operator):
         return {"FINISHED"}
 
     def invoke(self, context, event):
-        global running_job
         if bpy.app.background or context.window is None:
             return self.execute(context)
-        if running_job is not None:
-            self.report({"WARNING"}, "ndfbake: a bake is already running (Esc cancels it)")
-            return {"CANCELLED"}
         material = _material(context, self.material)
         if material is None:
             self.report({"ERROR"}, "ndfbake: no material to bake")
             return {"CANCELLED"}
-        try:
-            job = bake.prepare(material, bake.settings_from_material(material))
-        except bake.BakeError as e:
-            self.report({"ERROR"}, "ndfbake: " + e.message)
-            return {"CANCELLED"}
-        self._job = running_job = job
-        job.start()
-        wm = context.window_manager
-        wm.progress_begin(0, 100)
-        self._timer = wm.event_timer_add(0.1, window=context.window)
-        wm.modal_handler_add(self)
-        self._status(context)
-        return {"RUNNING_MODAL"}
-
-    def _status(self, context):
-        job = self._job
-        text = "ndfbake: baking '%s': %s %d%%%s" % (job.material_name, job.stage or "starting",
-                                                   int(job.fraction * 100), ", cancelling" if job.cancelled
-                                                   else " (Esc to cancel)")
-        if context.workspace is not None:
-            context.workspace.status_text_set(text)
-        context.window_manager.progress_update(int(job.fraction * 100))
-        for area in context.screen.areas if context.screen else ():
-            if area.type == "PROPERTIES":
-                area.tag_redraw()
-
-    def _end(self, context):
-        global running_job
-        wm = context.window_manager
-        if self._timer is not None:
-            wm.event_timer_remove(self._timer)
-            self._timer = None
-        wm.progress_end()
-        if context.workspace is not None:
-            context.workspace.status_text_set(None)
-        running_job = None
-
-    def modal(self, context, event):
-        job = self._job
-        if event.type == "ESC" and event.value == "PRESS":
-            job.cancel()
-            self._status(context)
-            return {"RUNNING_MODAL"}
-        if event.type != "TIMER":
-            return {"PASS_THROUGH"}
-        if not job.done:
-            self._status(context)
-            return {"PASS_THROUGH"}
-        job.join()
-        self._end(context)
-        if job.error is not None:
-            level = {"INFO"} if job.error.code == "CANCELLED" else {"ERROR"}
-            self.report(level, "ndfbake: " + job.error.message)
-            return {"CANCELLED"}
-        try:
-            result = bake.finish(job)
-        except bake.BakeError as e:
-            self.report({"ERROR"}, "ndfbake: " + e.message)
-            return {"CANCELLED"}
-        self.report({"INFO"}, "ndfbake: %s: %s" % (result.material, result.summary))
-        return {"FINISHED"}
-
-    def cancel(self, context):
-        # Blender ends the modal operator (a file is loaded, the window closes): stop the bake.
-        if self._job is not None:
-            self._job.cancel()
-            self._job.join()
-        self._end(context)
+        return self.start_bakes(context, [material])
 
 
-class NDFBAKE_OT_bake_all(bpy.types.Operator):
+class NDFBAKE_OT_bake_all(_ModalBakes, bpy.types.Operator):
     bl_idname = "ndfbake.bake_all"
     bl_label = "Bake All"
-    bl_description = "Bake every material with a normal map on the objects the scene renders"
+    bl_description = ("Bake every material with a normal map on the objects the scene renders "
+                      "(Esc cancels all of them)")
     bl_options = {"REGISTER", "UNDO"}
 
-    def execute(self, context):
+    def _materials(self, context):
         materials = bake.materials_needing_bake(context.scene)
         if not materials:
             self.report({"WARNING"}, "ndfbake: no material in scene '%s' uses a normal map" % context.scene.name)
+        return materials
+
+    def execute(self, context):
+        materials = self._materials(context)
+        if not materials:
             return {"CANCELLED"}
         wm = context.window_manager
         wm.progress_begin(0, len(materials))
@@ -154,13 +219,15 @@ class NDFBAKE_OT_bake_all(bpy.types.Operator):
                 outcomes.extend(bake.bake_materials([material]))
         finally:
             wm.progress_end()
-        failed = [(name, o) for name, o in outcomes if isinstance(o, bake.BakeError)]
-        for name, outcome in outcomes:
-            if not isinstance(outcome, bake.BakeError):
-                self.report({"INFO"}, "ndfbake: %s: %s" % (name, outcome.summary))
-        for name, error in failed:
-            self.report({"ERROR"}, "ndfbake: %s" % error.message)
-        return {"FINISHED"} if len(failed) < len(outcomes) else {"CANCELLED"}
+        return _report_outcomes(self, outcomes)
+
+    def invoke(self, context, event):
+        if bpy.app.background or context.window is None:
+            return self.execute(context)
+        materials = self._materials(context)
+        if not materials:
+            return {"CANCELLED"}
+        return self.start_bakes(context, materials)
 
 
 class NDFBAKE_OT_revert(bpy.types.Operator):

@@ -14,6 +14,9 @@ Steps, driven by bpy.app.timers from Blender's own event loop:
    the bake stops, the previous bake's files and nodes are untouched.
 4. Ctrl-Z (ed.undo, as the key does) after the bake restores the material as it was before the
    bake, and Ctrl-Shift-Z (ed.redo) brings the baked material back.
+5. Bake All from the UI with a second material: Esc while the second material fits leaves both
+   materials and all files as they were (the first one's finished bake is discarded); run again
+   to the end, it bakes both.
 The worker is held at its first "fit" progress call until the main thread has seen what it
 checks (a gate in BakeJob.run), so the test does not race the fit on a loaded machine.
 The process exits 0 when every check holds, 1 otherwise (printed).
@@ -29,12 +32,12 @@ import bpy
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import test_addon_helpers as h  # noqa: E402
 
-state = {"step": "start", "ticks": 0, "deadline": time.time() + 120, "gate_open": False}
+state = {"step": "start", "ticks": 0, "deadline": time.time() + 150, "hold": {"Window"}}
 
 
 def _install_gate():
-    """Holds the worker thread at its first "fit" progress call until the main thread opens the
-    gate or the job is cancelled, so that what the test observes does not depend on how fast the
+    """Holds the worker thread of a material in state["hold"] at its first "fit" progress call
+    until the main thread lets it go or the job is cancelled, so that what the test observes does not depend on how fast the
     machine fits (the progress callback runs on the worker; the modal operator on the main thread)."""
     from ndfbake import bake
     original = bake.BakeJob.run
@@ -42,7 +45,8 @@ def _install_gate():
     def gated_run(self, progress=None):
         def gate(stage, fraction):
             deadline = time.time() + 60
-            while stage == "fit" and not state["gate_open"] and not self.cancelled and time.time() < deadline:
+            while (stage == "fit" and self.material_name in state["hold"] and not self.cancelled
+                   and time.time() < deadline):
                 time.sleep(0.01)
             return False
         return original(self, gate)
@@ -124,7 +128,7 @@ def _tick():
             if job.stage == "fit" and not job.done:
                 state["ticks_while_fitting"] += 1  # Blender's event loop runs while the worker fits
             if state["ticks_while_fitting"] >= 5:
-                state["gate_open"] = True
+                state["hold"] = set()
             return 0.05
         material = bpy.data.materials["Window"]
         h.expect(bake.is_baked(material), "the modal bake did not bake the material")
@@ -160,7 +164,7 @@ def _tick():
         directory = state["dir"]
         material = bpy.data.materials["Window"]
         material.ndfbake_settings.max_lobes = 2
-        state["gate_open"] = False
+        state["hold"] = {"Window"}
         state["baked"] = (h.dump_material(material), _snapshot(directory))
         h.expect(_invoke_bake() == {"RUNNING_MODAL"}, "re-bake did not start")
         state["step"] = "cancel"
@@ -209,7 +213,49 @@ def _tick():
         h.expect(bake.is_baked(material) and h.dump_material(material) == state["baked_dump"],
                  "Ctrl-Shift-Z did not bring the bake back")
         print("Ctrl-Z restored the unbaked material; Ctrl-Shift-Z the baked one", flush=True)
-        _finish(True, "modal bake, screenshot, Esc cancel and undo work (%d UI ticks)" % state["ticks"])
+        state["step"] = "all_start"
+    elif step == "all_start":
+        directory = state["dir"]
+        second = h.normal_mapped_material("Second", h.write_normal_map(os.path.join(directory, "second.png"),
+                                                                       "weave", 64))
+        h.plane_with(second, name="Second plane").location = (3.0, 0.0, 0.0)
+        second.ndfbake_settings.max_lobes = 3  # (the panel drawing it would create the settings anyway)
+        state["all_before"] = ({m.name: h.dump_material(m) for m in bpy.data.materials if m.node_tree}, _snapshot(directory))
+        state["hold"] = {"Second"}
+        window, area, region = _properties_area()
+        with bpy.context.temp_override(window=window, area=area, region=region):
+            h.expect(bpy.ops.ndfbake.bake_all("INVOKE_DEFAULT") == {"RUNNING_MODAL"}, "Bake All did not start")
+        state["step"] = "all_cancel"
+    elif step == "all_cancel":
+        job = operators.running_job
+        h.expect(job is not None, "Bake All ended before the second material")
+        if job.material_name != "Second" or job.stage != "fit":
+            return 0.02
+        window = bpy.context.window_manager.windows[0]
+        window.event_simulate(type="ESC", value="PRESS")
+        window.event_simulate(type="ESC", value="RELEASE")
+        state["step"] = "all_cancelled"
+    elif step == "all_cancelled":
+        if operators.running_job is not None:
+            return 0.05
+        materials, files = state["all_before"]
+        now = {m.name: h.dump_material(m) for m in bpy.data.materials if m.node_tree}
+        h.expect(now == materials, "Esc in Bake All changed materials: %s" % h.differences(materials, now))
+        h.expect(_snapshot(state["dir"]) == files, "Esc in Bake All changed files: %s" % sorted(
+            set(_snapshot(state["dir"])) ^ set(files)))
+        print("Esc during Bake All (second material fitting): no material and no file changed", flush=True)
+        state["hold"] = set()
+        window, area, region = _properties_area()
+        with bpy.context.temp_override(window=window, area=area, region=region):
+            h.expect(bpy.ops.ndfbake.bake_all("INVOKE_DEFAULT") == {"RUNNING_MODAL"}, "Bake All did not start")
+        state["step"] = "all_done"
+    elif step == "all_done":
+        if operators.running_job is not None:
+            return 0.05
+        h.expect(all(bake.is_baked(bpy.data.materials[n]) for n in ("Window", "Second")), "Bake All did not bake both")
+        h.expect(not [n for n in os.listdir(state["dir"]) if n.endswith(bake.PENDING_SUFFIX)], "pending folders left")
+        print("Bake All from the UI baked both materials", flush=True)
+        _finish(True, "modal bake, screenshot, Esc cancel, undo and Bake All work (%d UI ticks)" % state["ticks"])
     return 0.05
 
 
