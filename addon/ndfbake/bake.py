@@ -395,10 +395,13 @@ def finish(job):
             raise BakeError("MATERIAL_CHANGED", "the nodes of '%s' changed during the bake; bake again"
                             % material.name)
     _commit_pending(job)
-    paths = _lobe_textures(job.out_dir, job.lod is not None)
+    report = _read_report(job.out_dir)
+    # The cheapest group that does: slots no texel uses (a tolerance left them empty) are all zero.
+    used = report.get("slots_used")
+    paths = [p for j, p in enumerate(_lobe_textures(job.out_dir, job.lod is not None))
+             if used is None or j >= len(used) or used[j]]
     if not paths:
         raise BakeError("NATIVE_ERROR", "the bake wrote no lobe texture into %s" % job.out_dir)
-    report = _read_report(job.out_dir)
     atlas = None
     if job.lod is not None:
         layout = report.get("atlas") or {}

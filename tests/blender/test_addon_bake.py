@@ -109,6 +109,13 @@ def test_operators_rebake_fewer_lobes_and_revert():
         h.expect(len([g for g in bpy.data.node_groups if g.name.startswith("NDFB Bumpy")]) == 1,
                  "old material groups kept: %s" % [g.name for g in bpy.data.node_groups])
 
+        # Four lobes allowed, but a tolerance that one lobe meets everywhere: the cheapest group.
+        material.ndfbake_settings.max_lobes = 4
+        material.ndfbake_settings.tolerance = 1.0
+        h.expect(bpy.ops.ndfbake.bake(material="Bumpy") == {"FINISHED"}, "re-bake with a tolerance")
+        tree = _group_nodes(material)[0].node_tree
+        h.expect(_principled_count(tree) == 1, "a tolerance one lobe meets: %d lobes" % _principled_count(tree))
+
         h.expect(bpy.ops.ndfbake.revert(material="Bumpy") == {"FINISHED"}, "revert operator")
         h.expect(h.dump_material(material) == before, "material differs after revert")
         h.expect(h.data_counts() == data_before, "data-blocks differ after revert")

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstring>
 #include <cstdio>
@@ -86,6 +87,25 @@ TEST_F(BakeApi, MaxLevelsFitsAndWritesOnlyTheLevelsAsked)
     fit_.max_levels = 65;
     EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("bad").c_str(), &decode_, &fit_, &write_), NDFB_ERROR_INVALID_ARGUMENT);
     EXPECT_NE(std::string(ndfb_last_error(ctx_)).find("max_levels"), std::string::npos);
+}
+
+TEST_F(BakeApi, TheReportNamesTheSlotsNoTexelUsesAndTheirTexturesAreZero)
+{
+    const std::string input = synth_file(Pattern::bumps, 32, 32, "bumps.png");
+    const std::string out = path("out");
+    fit_.tolerance = 1.0f;  // any error is tolerated: one lobe per texel
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+    std::ifstream report(out + "/report.json");
+    std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+    std::erase_if(text, [](char c) { return std::isspace(static_cast<unsigned char>(c)); });
+    ASSERT_NE(text.find("\"slots_used\":[true,false,false,false]"), std::string::npos);
+    for (int level = 0; level < 6; ++level)
+        for (int lobe = 1; lobe < 4; ++lobe) {
+            char file[32];
+            std::snprintf(file, sizeof file, "/level%02d_lobe%d.exr", level, lobe);
+            int w = 0, h = 0;
+            for (float v : read_rgba_exr(out + file, w, h)) ASSERT_EQ(v, 0.0f) << file;
+        }
 }
 
 TEST_F(BakeApi, DirectXInputBakesExactlyLikeItsOpenGLTwin)

@@ -214,6 +214,11 @@ std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded,
         .value("fine_normals_per_texel", kReportSampleCap)
         .end_object();
 
+    // Slots with no lobe at any level (possible with a tolerance): their textures are all zero.
+    json.begin_array("slots_used");
+    for (bool used : pyramid.slots_used()) json.value(nullptr, used);
+    json.end_array();
+
     json.begin_array("levels");
     for (const LevelStats& s : stats) {
         json.begin_object()

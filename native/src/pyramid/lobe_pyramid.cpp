@@ -52,6 +52,17 @@ int pyramid_level_count(int width, int height, const PyramidSettings& settings)
     return settings.max_levels > 0 ? std::min(all, settings.max_levels) : all;
 }
 
+std::vector<bool> LobePyramid::slots_used() const
+{
+    std::vector<bool> used(static_cast<size_t>(slots), false);
+    for (const LobeLevel& level : levels) {
+        for (uint8_t slot : level.level0_slot) used[slot] = true;
+        for (size_t i = 0; i < level.lobes.size(); ++i)
+            if (level.lobes[i].alpha > 0.0f) used[i % size_t(slots)] = true;
+    }
+    return used;
+}
+
 LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& settings, const ProgressTick& tick)
 {
     LobePyramid pyramid;

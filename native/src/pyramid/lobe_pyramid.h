@@ -73,6 +73,9 @@ public:
     // The non-empty lobes of a texel.
     std::vector<VmfLobe> texel_lobes(int level, int x, int y) const;
     int lobe_count(int level, int x, int y) const;
+    // Whether any texel of any level has a lobe in slot j: an unused slot's textures are zero
+    // everywhere, and a shader can leave it out.
+    std::vector<bool> slots_used() const;
 };
 
 // Fits every level ≥ 1 from all the fine normals under each texel (§7.1), seeded from the level
