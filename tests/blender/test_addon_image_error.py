@@ -1,0 +1,217 @@
+"""Image error of the baked demo scene against references, and the command-line bake of its .blend.
+
+Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_image_error.py -- LIB
+
+The scene is examples/demo_scene.py's (a receding metal ground plane and four metal spheres, five
+normal maps synthesized by the library, the sunset HDR), built at 128x72:
+
+- test_filtered_renders_halve_the_image_error, the issue's acceptance. EEVEE: the reference is the
+  same scene rendered by EEVEE at 8x8 the resolution with the normal maps point-sampled ('Closest',
+  no MIP-mapping), box-downsampled; the figure is the RMS over 4x4-pixel windows of the difference
+  in mean luminance (examples/image_error.py). Cycles: the reference has 512 samples per pixel of
+  the unfiltered maps; naive and ndfbake have 16; the figure is the per-pixel RMSE in linear RGB.
+  On each region where filtering matters (the ground beyond 8 m, the two far spheres) ndfbake's
+  error must be at most half of the naive normal map's, in both engines. Every figure is printed,
+  also for the whole image and the near ground. The references are checked first: the far ground
+  of the EEVEE reference must be duller than the naive render (the point of filtering), and the
+  naive render must be measurably off.
+- test_command_line_bake_changes_only_the_baked_materials: examples/bake_blend.py bakes the saved
+  demo .blend in a separate `blender -b`; in the saved file the five rendered normal-mapped
+  materials are baked and every other datablock (the plain and the unrendered materials, the
+  world, objects, meshes, camera, render settings, the original images) is exactly as before;
+  bake.revert on each baked material then restores every node, link and value and the data-block
+  lists, and deletes the lobe folders.
+"""
+import os
+import subprocess
+import sys
+
+import bpy
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import test_addon_helpers as h  # noqa: E402
+
+sys.path.insert(0, os.path.join(h.REPO, "examples"))
+import demo_scene  # noqa: E402
+import image_error  # noqa: E402
+
+WIDTH, HEIGHT = 128, 72
+REFERENCE_SAMPLES = 512
+SAMPLES = 16
+ACCEPTED_RATIO = 0.5                      # the issue: ndfbake's error at most half the naive map's
+REGIONS = ("ground_far", "spheres_far")   # where filtering matters; "all", "ground_near" printed too
+MIN_WINDOWS = 40                          # 4x4 windows a region needs for its figure to mean anything
+BAKE_SCRIPT = os.path.join(h.REPO, "examples", "bake_blend.py")
+
+
+def test_filtered_renders_halve_the_image_error():
+    directory = h.temp_dir()
+    try:
+        h.reset_scene()
+        scene_info = demo_scene.build_scene(directory, WIDTH, HEIGHT)
+        scene = bpy.context.scene
+        masks = demo_scene.region_masks(scene, scene_info["ground"], scene_info["far_spheres"])
+        for region in REGIONS:
+            windows = int(image_error.block_mask(masks[region]).sum())
+            h.expect(windows >= MIN_WINDOWS, "region %s has %d windows (< %d)" % (region, windows, MIN_WINDOWS))
+
+        renders = os.path.join(directory, "renders")
+        images, info = demo_scene.render_plain(scene, renders, scene_info["materials"], REFERENCE_SAMPLES, SAMPLES,
+                                               log=lambda s: print(s, flush=True))
+        h.expect(info["eevee_reference"]["factor"] == 8, "EEVEE reference at %dx" % info["eevee_reference"]["factor"])
+
+        bakes = demo_scene.bake_all(scene)
+        for b in bakes:
+            print("  %s %s: %s" % ("baked" if "summary" in b else "FAILED", b["material"],
+                                   b.get("summary") or "[%s] %s" % (b.get("error"), b.get("message"))), flush=True)
+        h.expect(sorted(b["material"] for b in bakes) == sorted(scene_info["materials"]),
+                 "baked %s, expected %s" % ([b["material"] for b in bakes], scene_info["materials"]))
+        h.expect(all("error" not in b for b in bakes), "a bake failed")
+        baked, _ = demo_scene.render_baked(scene, renders, SAMPLES, log=lambda s: print(s, flush=True))
+        images.update(baked)
+        for name, pixels in images.items():
+            h.expect(np.isfinite(pixels).all(), "%s: non-finite pixels" % name)
+            h.expect(float(pixels.mean()) > 0.05, "%s renders black" % name)
+
+        errors = demo_scene.measure(images, masks)
+        print(demo_scene.format_errors(errors, info), flush=True)
+
+        # The references are what the figures stand on: the point-sampled, supersampled EEVEE
+        # render must show the far ground duller than the MIP-mapped naive one, and differ from it.
+        far = errors["eevee"]["ground_far"]
+        h.expect(far["reference"]["mean"] < far["naive"]["mean"],
+                 "EEVEE reference's far ground (%.4f) is not duller than the naive render's (%.4f)"
+                 % (far["reference"]["mean"], far["naive"]["mean"]))
+        h.expect(far["naive"]["block"] > 0.05 * far["reference"]["mean"],
+                 "the naive render is within %.4f of the EEVEE reference: nothing to measure" % far["naive"]["block"])
+
+        failures = []
+        for engine, key, what in (("eevee", "block", "EEVEE block-luminance error"),
+                                  ("cycles", "rmse", "Cycles %d spp per-pixel RMSE" % SAMPLES)):
+            for region in REGIONS:
+                e = errors[engine][region]
+                ratio = e["ndfbake"][key] / e["naive"][key]
+                verdict = "ok" if ratio <= ACCEPTED_RATIO else "FAIL"
+                print("  %s %s, %s: ndfbake %.4f / naive %.4f = %.3f (accept <= %.2f)" % (
+                    verdict, what, region, e["ndfbake"][key], e["naive"][key], ratio, ACCEPTED_RATIO), flush=True)
+                if not ratio <= ACCEPTED_RATIO:
+                    failures.append("%s on %s: ratio %.3f > %.2f" % (what, region, ratio, ACCEPTED_RATIO))
+        h.expect(not failures, "; ".join(failures))
+    finally:
+        h.cleanup(directory)
+
+
+# ---- the command-line bake --------------------------------------------------------------------
+
+# Debian's Blender has no OpenImageDenoise: reading these enums only prints a warning.
+_UNREADABLE = {"denoiser", "preview_denoiser"}
+
+
+def _settings(rna_struct, skip=_UNREADABLE):
+    values = {}
+    for prop in rna_struct.bl_rna.properties:
+        if prop.type in {"BOOLEAN", "INT", "FLOAT", "STRING", "ENUM"} and prop.identifier not in skip \
+                and prop.identifier != "rna_type":
+            values[prop.identifier] = h._value(getattr(rna_struct, prop.identifier))
+    return values
+
+
+def dump_file():
+    """Every datablock of the open file that a bake could touch, as comparable values."""
+    data = {"materials": {m.name: h.dump_material(m) for m in bpy.data.materials},
+            "worlds": {w.name: (h.dump_tree(w.node_tree), _settings(w)) for w in bpy.data.worlds},
+            "objects": {}, "meshes": {}, "cameras": {c.name: _settings(c) for c in bpy.data.cameras},
+            "images": {}, "node_groups": {},
+            "scene": {s.name: (_settings(s.render), _settings(s.cycles), _settings(s.eevee),
+                               _settings(s.view_settings), s.camera.name if s.camera else None,
+                               s.world.name if s.world else None) for s in bpy.data.scenes}}
+    for obj in bpy.data.objects:
+        data["objects"][obj.name] = (obj.type, obj.data.name if obj.data else None,
+                                     tuple(h._value(tuple(row)) for row in obj.matrix_world),
+                                     tuple(s.material.name if s.material else None for s in obj.material_slots),
+                                     obj.hide_render)
+    for mesh in bpy.data.meshes:
+        uv = mesh.uv_layers.active.data if mesh.uv_layers.active else []
+        data["meshes"][mesh.name] = (len(mesh.vertices), len(mesh.polygons), tuple(l.name for l in mesh.uv_layers),
+                                     round(sum(d.uv[0] + 2 * d.uv[1] for d in uv), 3),
+                                     tuple(m.name if m else None for m in mesh.materials))
+    for image in bpy.data.images:
+        data["images"][image.name] = (image.filepath, image.source, image.colorspace_settings.name,
+                                      bool(image.packed_file), tuple(image.keys()))
+    for group in bpy.data.node_groups:
+        data["node_groups"][group.name] = tuple(group.keys())
+    return data
+
+
+def reopen(blend):
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    return dump_file()
+
+
+def run_bake_script(blend, *args):
+    library, _ = h.arguments()
+    env = dict(os.environ, NDFBAKE_LIBRARY=library)
+    proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", blend,
+                           "--python-expr", "import sys; sys.dont_write_bytecode = True",  # keep addon/ clean
+                           "--python", BAKE_SCRIPT, "--"] + list(args),
+                          env=env, capture_output=True, text=True, timeout=300)
+    lines = [l for l in proc.stdout.splitlines() if l.startswith(("baked", "FAILED", "reverted", "bake_blend"))]
+    print("  bake_blend.py %s -> exit %d\n    %s" % (" ".join(args), proc.returncode, "\n    ".join(lines)), flush=True)
+    return proc.returncode, proc.stdout + proc.stderr
+
+
+def test_command_line_bake_changes_only_the_baked_materials():
+    from ndfbake import bake, nodes
+    directory = h.temp_dir()
+    try:
+        h.reset_scene()
+        scene_info = demo_scene.build_scene(directory, WIDTH, HEIGHT)
+        blend = scene_info["blend"]
+        expected = sorted(scene_info["materials"])
+        before = reopen(blend)
+        counts_before = h.data_counts()
+
+        code, out = run_bake_script(blend, "--max-lobes", str(demo_scene.MAX_LOBES))
+        h.expect(code == 0, "bake_blend.py exited %d:\n%s" % (code, out))
+        h.expect("baked %d of %d materials" % (len(expected), len(expected)) in out, out)
+
+        after = reopen(blend)
+        baked = sorted(m.name for m in bpy.data.materials if bake.is_baked(m))
+        h.expect(baked == expected, "baked %s, expected %s" % (baked, expected))
+        for name in expected:
+            h.expect(after["materials"][name] != before["materials"][name], "%s did not change" % name)
+        for name, dump in before["materials"].items():
+            if name not in expected:
+                h.expect(after["materials"].get(name) == dump, "material %s changed" % name)
+        for key in ("worlds", "objects", "meshes", "cameras", "scene"):
+            h.expect(after[key] == before[key], "the %s changed" % key)
+        for name, image in before["images"].items():
+            h.expect(after["images"].get(name) == image, "image %s changed: %s -> %s"
+                     % (name, image, after["images"].get(name)))
+        for kind in ("images", "node_groups"):
+            new = sorted(set(after[kind]) - set(before[kind]))
+            h.expect(new, "the bake added no %s" % kind)
+            untagged = [name for name in new if nodes.TAG not in after[kind][name][-1]]
+            h.expect(not untagged, "%s added without the ndfbake tag: %s" % (kind, untagged))
+        folders = [os.path.join(directory, bake.safe_name(name) + bake.FOLDER_SUFFIX) for name in expected]
+        h.expect(all(os.path.isdir(f) for f in folders), "a lobe folder is missing: %s" % os.listdir(directory))
+
+        for name in expected:
+            removed, left = bake.revert(bpy.data.materials[name])
+            h.expect(removed > 0 and not left, "revert %s: %d removed, left %s" % (name, removed, left))
+        reverted = dump_file()
+        for name in expected:
+            h.expect(reverted["materials"][name] == before["materials"][name],
+                     "revert did not restore %s" % name)
+        h.expect(h.data_counts() == counts_before, "data-blocks after revert: %s vs %s"
+                 % (h.data_counts(), counts_before))
+        h.expect(reverted == before, "the file differs from the original after revert")
+        h.expect(not any(os.path.exists(f) for f in folders), "lobe folders left: %s" % os.listdir(directory))
+    finally:
+        h.cleanup(directory)
+
+
+if __name__ == "__main__":
+    h.import_addon()
+    h.run([test_command_line_bake_changes_only_the_baked_materials, test_filtered_renders_halve_the_image_error])
