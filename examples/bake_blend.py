@@ -2,7 +2,7 @@
 (bake.py, the same code the Bake button runs).
 
     blender -b scene.blend --python examples/bake_blend.py -- [--material NAME ...]
-            [--max-lobes N] [--tolerance T] [--pack] [--revert] [--no-save]
+            [--max-lobes N] [--tolerance T] [--level-of-detail scene|renderer] [--pack] [--revert] [--no-save]
 
 Without --material it bakes every material the scene needs: those with a tangent-space normal
 map (Image Texture -> Normal Map -> Principled BSDF) on objects the scene renders. Each material's
@@ -51,6 +51,10 @@ def _arguments():
     parser.add_argument("--max-lobes", type=int, default=4, help="vMF lobes per texel at most (1..8, default 4)")
     parser.add_argument("--tolerance", type=float, default=0.0,
                         help="relative error a texel may keep: fewer lobes where it suffices (default 0)")
+    parser.add_argument("--level-of-detail", choices=("scene", "renderer"), default="scene",
+                        help="scene (default): the node group picks a level per pixel from the scene camera and "
+                             "only the levels the cameras reach are baked; renderer: level 0, filtered by the "
+                             "renderer (EEVEE's own MIP levels)")
     parser.add_argument("--pack", action="store_true", help="also pack the lobe textures into the .blend")
     parser.add_argument("--revert", action="store_true", help="undo earlier bakes instead of baking")
     parser.add_argument("--no-save", action="store_true", help="do not save the .blend afterwards")
@@ -79,7 +83,8 @@ def main():
         print("bake_blend: nothing to %s in %s" % ("revert" if args.revert else "bake", bpy.data.filepath))
         return 0
 
-    settings = bake.BakeSettings(max_lobes=args.max_lobes, tolerance=args.tolerance, pack=args.pack)
+    settings = bake.BakeSettings(max_lobes=args.max_lobes, tolerance=args.tolerance, pack=args.pack,
+                                 level_of_detail=args.level_of_detail.upper())
     start = time.perf_counter()
     failures = 0
     changed = 0

@@ -5,8 +5,8 @@ Install), or put this folder into a scripts path's addons/. The native library (
 lives beside this file; see native.py for where else it is looked for. Registering never fails
 for want of the library: the panel then shows why it cannot be used.
 
-Modules: native (ctypes), material_scan (finds the normal map), nodes (node groups),
-bake (the work), operators and ui (thin skins). Scripts call bake.py, or the operators
+Modules: native (ctypes), material_scan (finds the normal map), scene_lod (what the scene's
+cameras need), nodes (node groups), bake (the work), operators and ui (thin skins). Scripts call bake.py, or the operators
 bpy.ops.ndfbake.bake / bake_all / revert; examples/bake_blend.py is a command line.
 """
 
@@ -23,12 +23,12 @@ bl_info = {
 
 if "bpy" in locals():
     import importlib
-    for _module in (native, material_scan, nodes, bake, operators, ui):  # noqa: F821 (reload)
+    for _module in (native, material_scan, scene_lod, nodes, bake, operators, ui):  # noqa: F821 (reload)
         importlib.reload(_module)
 
 import bpy  # noqa: E402
 
-from . import bake, material_scan, native, nodes, operators, ui  # noqa: E402,F401
+from . import bake, material_scan, native, nodes, operators, scene_lod, ui  # noqa: E402,F401
 
 
 def register():

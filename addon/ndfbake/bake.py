@@ -99,7 +99,8 @@ def settings_from_material(material):
     props = getattr(material, "ndfbake_settings", None)
     if props is None:
         return BakeSettings()
-    return BakeSettings(max_lobes=props.max_lobes, tolerance=props.tolerance, pack=props.pack)
+    return BakeSettings(max_lobes=props.max_lobes, tolerance=props.tolerance, pack=props.pack,
+                        level_of_detail=props.level_of_detail)
 
 
 # ---- step 1: prepare ------------------------------------------------------------------------------

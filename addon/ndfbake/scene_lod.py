@@ -4,16 +4,19 @@ which the node group picks a level per shading point.
 Cycles has no MIP levels and shader nodes see no screen derivatives (DESIGN.md), but they see the
 distance to the camera and the angle of view. The node group ("NDFB Level of Detail") computes
 
-    footprint = (d·pixel_angle + pixel_size) · texels_per_unit / sqrt(max(|cos θ|, MIN_FACING))
+    footprint = (d·pixel_angle + pixel_size) · texels_per_unit / max(|cos θ|, MIN_FACING)^STRETCH
     level     = clamp(log2(footprint), 0, levels − 1)
 
-the side, in texels of the normal map, of the square whose area a pixel covers on the surface:
-d is the distance to the camera; pixel_angle the angle a pixel subtends (a perspective camera)
-and pixel_size its width (an orthographic one); texels_per_unit the UV texel density from the
+the side, in texels of the normal map, of the square a pixel covers on the surface: d is the
+distance to the camera; pixel_angle the angle a pixel subtends (a perspective camera) and
+pixel_size its width (an orthographic one); texels_per_unit the UV texel density from the
 library's tangent module (ndfb_texel_density, world space, times the map's size); θ the angle
-between the view ray and the surface, which stretches the footprint by 1/cos θ along one axis
-(sqrt: the geometric mean of the two axes, between the over-blur of the long axis and the
-aliasing of the short one).
+between the view ray and the surface, which stretches the footprint by 1/cos θ along one axis.
+STRETCH = 1 takes that long axis: the texel then holds every normal the pixel sees, so a few
+samples per pixel (Cycles) see one distribution instead of glints from texel to texel, at the
+price of a wider distribution across the short axis, which for the statistically uniform
+normal maps of materials is the same distribution. (STRETCH = 0.5, the geometric mean of the
+axes, gave the same image errors on the demo scene at 128×72.)
 
 The same formula over the vertices of every object that renders the material, seen from every
 camera in the scene, gives the levels the bake must fit: up to the ceiling of the largest level
@@ -27,9 +30,10 @@ import numpy as np
 
 from . import native
 
-# Grazing views stretch the footprint without bound; past 1/64 (an 89° view) the extra blur is
-# capped at 8×, three levels, so that silhouettes keep some detail.
+# Grazing views stretch the footprint without bound; past 1/64 (an 89° view) the stretch is
+# capped (at 64×, six levels, with STRETCH = 1) so that silhouettes keep some detail.
 MIN_FACING = 1.0 / 64.0
+STRETCH = 1.0
 
 
 @dataclass
@@ -138,7 +142,7 @@ def footprints(positions, normals, camera, texels_per_unit):
     distance = np.minimum(np.linalg.norm(offset, axis=1), camera.clip_end)
     facing = np.abs(np.einsum("ij,ij->i", offset, normals)) / np.maximum(distance, 1e-9)
     footprint = (distance * camera.pixel_angle + camera.pixel_size) * texels_per_unit
-    return footprint / np.sqrt(np.maximum(facing, MIN_FACING))
+    return footprint / np.maximum(facing, MIN_FACING) ** STRETCH
 
 
 def level_count(width, height):

@@ -2,7 +2,7 @@
 import textwrap
 
 import bpy
-from bpy.props import BoolProperty, FloatProperty, IntProperty
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
 
 from . import bake, material_scan, native, nodes, operators
 
@@ -15,6 +15,13 @@ class NDFBakeSettings(bpy.types.PropertyGroup):
                              default=0.0, min=0.0, max=1.0, precision=3, step=1)
     pack: BoolProperty(name="Pack Textures", description="Also pack the lobe textures into the .blend",
                        default=False)
+    level_of_detail: EnumProperty(
+        name="Level of Detail", default="SCENE",
+        items=(("SCENE", "Scene Camera", "Pick the MIP level per pixel from the scene camera's distance, focal "
+                "length and resolution and the mesh's texel density (both engines; bakes only the levels "
+                "the cameras reach)"),
+               ("RENDERER", "Renderer", "Sample level 0 and leave filtering to the renderer (EEVEE MIP-maps it; "
+                "Cycles does not)")))
 
 
 def _wrapped(layout, text, icon="NONE", width=60):
@@ -67,6 +74,7 @@ class NDFBAKE_PT_material(bpy.types.Panel):
         column = layout.column()
         column.prop(settings, "max_lobes")
         column.prop(settings, "tolerance")
+        column.prop(settings, "level_of_detail")
         column.prop(settings, "pack")
 
         baked = bake.is_baked(material)

@@ -78,7 +78,7 @@ def test_material_lod_measures_texel_density_and_the_levels_reached():
         h.expect(abs(lod.texels_per_unit - 64.0 / 6.0) < 1e-3, "texel density %r" % lod.texels_per_unit)
         # The far corners: distance sqrt(40² + 2·3²), facing 40 / distance.
         distance = math.sqrt(40.0 ** 2 + 18.0)
-        footprint = distance * 36.0 / 50.0 / 100.0 * 64.0 / 6.0 / math.sqrt(40.0 / distance)
+        footprint = distance * 36.0 / 50.0 / 100.0 * 64.0 / 6.0 / (40.0 / distance) ** scene_lod.STRETCH
         h.expect(abs(lod.footprint_max - footprint) < 1e-3 * footprint, "footprint %r vs %r" % (
             lod.footprint_max, footprint))
         h.expect(lod.levels == min(7, math.ceil(math.log2(footprint)) + 2), "levels %d" % lod.levels)
@@ -125,6 +125,7 @@ def _render_cycles(path, width, height):
 
 def test_the_level_of_detail_group_renders_the_footprint_formula():
     from ndfbake import nodes
+    from ndfbake.scene_lod import STRETCH
     h.reset_scene()
     directory = h.temp_dir()
     try:
@@ -154,7 +155,7 @@ def test_the_level_of_detail_group_renders_the_footprint_formula():
         x, y = (i - width / 2.0) * 36.0 / width, (j - height / 2.0) * 36.0 / width
         length = np.sqrt(x * x + y * y + lens * lens)
         distance, facing = depth * length / lens, lens / length
-        expected = np.clip(np.log2(distance * pixel_angle * texels_per_unit / np.sqrt(facing)), 0.0, 20.0)
+        expected = np.clip(np.log2(distance * pixel_angle * texels_per_unit / facing ** STRETCH), 0.0, 20.0)
         error = np.abs(rendered - expected)
         print("  level %.3f..%.3f, largest difference %.2e" % (expected.min(), expected.max(), error.max()))
         h.expect(expected.max() - expected.min() > 0.3, "the view angle should change the level")
