@@ -300,7 +300,7 @@ NDFB_API ndfb_status ndfb_split_vertices(ndfb_context ctx, const ndfb_mesh* mesh
 
 /* UV texel density for level-of-detail selection: per face, sqrt(UV area / world area), i.e. UV
  * units per world unit (times the texture's size in texels: texels per world unit). 0 for faces
- * without world or UV area. mesh_density (may be NULL): the same over the whole mesh,
+ * without world or UV area (or so little world area that the density passes float's range). mesh_density (may be NULL): the same over the whole mesh,
  * sqrt(total UV area / total world area). */
 NDFB_API ndfb_status ndfb_texel_density(ndfb_context ctx, const ndfb_mesh* mesh, float* face_density,
                                         size_t face_count, double* mesh_density);

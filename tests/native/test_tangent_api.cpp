@@ -172,14 +172,21 @@ TEST_F(TangentApi, TexelDensityIsTheSquareRootOfUVAreaOverWorldArea)
     const uint32_t a = m.vertex({0, 0, 1}), b = m.vertex({1, 0, 1}), c = m.vertex({0, 1, 1});
     m.face({a, b, c}, {{{0, 0}}, {{2, 0}}, {{0, 2}}}, kUp);        // 0.5 world, 2 UV: density 2
     m.face({a, b, c}, {{{0.3f, 0.3f}}, {{0.3f, 0.3f}}, {{0.3f, 0.3f}}}, kUp);  // no UV area: 0
+    // World area 1e-60 under UV area 0.5: a density of 1e30 overflows no float; 1e-80 would.
+    const uint32_t tiny_b = m.vertex({1e-30f, 0, 1}), tiny_c = m.vertex({0, 1e-30f, 1});
+    const uint32_t tinier_b = m.vertex({1e-40f, 0, 1}), tinier_c = m.vertex({0, 1e-40f, 1});
+    m.face({a, tiny_b, tiny_c}, {{{0, 0}}, {{1, 0}}, {{0, 1}}}, kUp);
+    m.face({a, tinier_b, tinier_c}, {{{0, 0}}, {{1, 0}}, {{0, 1}}}, kUp);
     const ndfb_mesh v = view(m);
-    std::vector<float> density(3);
+    std::vector<float> density(5);
     double total = 0;
     ASSERT_EQ(ndfb_texel_density(ctx_, &v, density.data(), density.size(), &total), NDFB_OK) << error();
     EXPECT_NEAR(density[0], 0.5, 1e-6);
     EXPECT_NEAR(density[1], 2.0, 1e-6);
     EXPECT_EQ(density[2], 0.0f);
-    EXPECT_NEAR(total, std::sqrt(3.0 / 5.0), 1e-6);
+    EXPECT_NEAR(density[3], 1e30f, 1e24f);
+    EXPECT_EQ(density[4], 0.0f);  // sqrt(0.5 / 5e-81) is past float's range: no usable world area
+    EXPECT_NEAR(total, std::sqrt(4.0 / 5.0), 1e-6);
 }
 
 TEST_F(TangentApi, DiagnosticsCountWhatAUserCanFix)

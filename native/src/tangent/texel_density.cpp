@@ -1,6 +1,7 @@
 #include "tangent/texel_density.h"
 
 #include <cmath>
+#include <limits>
 
 #include "error.h"
 
@@ -35,7 +36,10 @@ double texel_density(const MeshInput& mesh, std::span<float> face_density)
     double world = 0.0, uv = 0.0;
     for (size_t f = 0; f < mesh.face_count(); ++f) {
         const FaceAreas a = face_areas(mesh, f);
-        face_density[f] = a.world > 0.0 && a.uv > 0.0 ? float(std::sqrt(a.uv / a.world)) : 0.0f;
+        // A face of next to no world area under real UV area has a density past float's range
+        // (found by fuzz_tangent): it has no usable world area either.
+        const double density = a.world > 0.0 && a.uv > 0.0 ? std::sqrt(a.uv / a.world) : 0.0;
+        face_density[f] = density <= double(std::numeric_limits<float>::max()) ? float(density) : 0.0f;
         world += a.world;
         uv += a.uv;
     }
