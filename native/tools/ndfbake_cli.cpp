@@ -39,6 +39,8 @@ bake options:
   --color FILE         base-colour image of the same size: also write per-lobe colour EXRs
   --precision P        half (default) or float EXR pixels
   --levels N           fit and write levels 0..N-1 only (default 0: every level down to 1x1)
+  --atlas              also write atlas_lobeJ.exr: every level of lobe slot J in one image
+                       (for renderers without MIP levels; layout in report.json)
   --method M           per-level (default: every level from its fine normals) or hierarchical
                        (every level from the level below's lobes: faster, less accurate)
   --iterations N       EM iterations per texel at most (default 20)
@@ -68,7 +70,7 @@ struct Args {
     std::vector<std::pair<std::string, std::string>> options;  // name → value ("" for flags)
 };
 
-bool is_flag(const std::string& name) { return name == "--no-align" || name == "--quiet"; }
+bool is_flag(const std::string& name) { return name == "--no-align" || name == "--quiet" || name == "--atlas"; }
 
 bool parse_args(int argc, char** argv, int first, Args& args, std::string& error)
 {
@@ -206,6 +208,7 @@ int run_bake(ndfb_context ctx, const Args& args)
             fit.max_iterations = uint32_t(number);
         else if (name == "--no-align") fit.align = 0;
         else if (name == "--quiet") progress.quiet = true;
+        else if (name == "--atlas") write.atlas = 1;
         else return fail(1, "bad option " + name + (value.empty() ? "" : " " + value) + " (see --help)");
     }
     if (out_dir.empty()) return fail(1, "bake needs --out DIR");
