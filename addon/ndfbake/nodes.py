@@ -51,6 +51,8 @@ INTEGRAL_GROUP = "NDFB GGX Sphere Integral v%d" % GROUP_VERSION
 LOD_GROUP = "NDFB Level of Detail v%d" % GROUP_VERSION
 TAPS_GROUP = "NDFB Atlas Taps v%d" % GROUP_VERSION
 BILINEAR_GROUP = "NDFB Bilinear v%d" % GROUP_VERSION
+LOD_INPUTS = ("Texels per Unit", "Pixel Angle", "Pixel Size")
+TAP_CORNERS = ("00", "10", "01", "11")  # x then y offset of a bilinear tap
 GGX_VMF_WIDENING = 1.5                # native/src/math/brdf.h kGgxVmfWidening
 E = 2.718281828459045
 
@@ -71,6 +73,24 @@ def _new_group(name):
     tree = bpy.data.node_groups.new(name, "ShaderNodeTree")
     tree[TAG] = GROUP_VERSION
     return tree
+
+
+def _group_with_io(name, inputs, outputs, span=(-900, 700)):
+    """A new tagged group with (socket type, name) inputs and outputs; returns the tree and its
+    Group Input and Group Output nodes (placed at x = span)."""
+    tree = _new_group(name)
+    for socket_type, socket_name in inputs:
+        _add_socket(tree, "INPUT", socket_type, socket_name)
+    for socket_type, socket_name in outputs:
+        _add_socket(tree, "OUTPUT", socket_type, socket_name)
+    gin = tree.nodes.new("NodeGroupInput")
+    gin.location = (span[0], 0)
+    gout = tree.nodes.new("NodeGroupOutput")
+    gout.location = (span[1], 0)
+    return tree, gin, gout
+
+
+FLOAT, COLOR, VECTOR = "NodeSocketFloat", "NodeSocketColor", "NodeSocketVector"
 
 
 def _add_socket(tree, in_out, socket_type, name):
@@ -126,13 +146,7 @@ def sphere_integral_group():
     tree = _find_group(INTEGRAL_GROUP)
     if tree is not None:
         return tree
-    tree = _new_group(INTEGRAL_GROUP)
-    _add_socket(tree, "INPUT", "NodeSocketFloat", "Alpha")
-    _add_socket(tree, "OUTPUT", "NodeSocketFloat", "Integral")
-    gin = tree.nodes.new("NodeGroupInput")
-    gin.location = (-900, 0)
-    gout = tree.nodes.new("NodeGroupOutput")
-    gout.location = (600, 0)
+    tree, gin, gout = _group_with_io(INTEGRAL_GROUP, [(FLOAT, "Alpha")], [(FLOAT, "Integral")], (-900, 600))
     x = _math(tree, "MAXIMUM", gin.outputs["Alpha"], 1e-4, location=(-700, 0))
     x2 = _math(tree, "MULTIPLY", x, x, location=(-550, 0))
     k = _math(tree, "SQRT", _math(tree, "SUBTRACT", 1.0, x2, location=(-400, -150)), location=(-250, -150))
@@ -151,17 +165,9 @@ def lobe_group():
     if tree is not None:
         return tree
     integral = sphere_integral_group()
-    tree = _new_group(LOBE_GROUP)
-    _add_socket(tree, "INPUT", "NodeSocketColor", "Lobe")
-    _add_socket(tree, "INPUT", "NodeSocketFloat", "Lobe Z")
-    _add_socket(tree, "INPUT", "NodeSocketFloatFactor", "Roughness")
-    for name, kind in (("Weight", "NodeSocketFloat"), ("Normal", "NodeSocketColor"),
-                       ("Roughness", "NodeSocketFloat"), ("Amplitude", "NodeSocketFloat")):
-        _add_socket(tree, "OUTPUT", kind, name)
-    gin = tree.nodes.new("NodeGroupInput")
-    gin.location = (-1400, 0)
-    gout = tree.nodes.new("NodeGroupOutput")
-    gout.location = (1300, 0)
+    tree, gin, gout = _group_with_io(
+        LOBE_GROUP, [(COLOR, "Lobe"), (FLOAT, "Lobe Z"), ("NodeSocketFloatFactor", "Roughness")],
+        [(FLOAT, "Weight"), (COLOR, "Normal"), (FLOAT, "Roughness"), (FLOAT, "Amplitude")], (-1400, 1300))
 
     sep = tree.nodes.new("ShaderNodeSeparateXYZ")  # colour -> (R, G, B)
     sep.location = (-1200, 100)
@@ -233,14 +239,8 @@ def level_of_detail_group():
     if tree is not None:
         return tree
     from .scene_lod import MIN_FACING, STRETCH
-    tree = _new_group(LOD_GROUP)
-    for name in ("Texels per Unit", "Pixel Angle", "Pixel Size", "Max Level"):
-        _add_socket(tree, "INPUT", "NodeSocketFloat", name)
-    _add_socket(tree, "OUTPUT", "NodeSocketFloat", "Level")
-    gin = tree.nodes.new("NodeGroupInput")
-    gin.location = (-900, 0)
-    gout = tree.nodes.new("NodeGroupOutput")
-    gout.location = (700, 0)
+    tree, gin, gout = _group_with_io(
+        LOD_GROUP, [(FLOAT, name) for name in LOD_INPUTS + ("Max Level",)], [(FLOAT, "Level")])
     camera = tree.nodes.new("ShaderNodeCameraData")
     camera.location = (-900, 300)
     geometry = tree.nodes.new("ShaderNodeNewGeometry")
@@ -271,18 +271,10 @@ def atlas_taps_group():
     tree = _find_group(TAPS_GROUP)
     if tree is not None:
         return tree
-    tree = _new_group(TAPS_GROUP)
-    _add_socket(tree, "INPUT", "NodeSocketVector", "UV")
-    for name in ("X", "Y", "W", "H", "Atlas Width", "Atlas Height", "Repeat"):
-        _add_socket(tree, "INPUT", "NodeSocketFloat", name)
-    for name in ("UV 00", "UV 10", "UV 01", "UV 11"):
-        _add_socket(tree, "OUTPUT", "NodeSocketVector", name)
-    for name in ("Fx", "Fy"):
-        _add_socket(tree, "OUTPUT", "NodeSocketFloat", name)
-    gin = tree.nodes.new("NodeGroupInput")
-    gin.location = (-1200, 0)
-    gout = tree.nodes.new("NodeGroupOutput")
-    gout.location = (900, 0)
+    tree, gin, gout = _group_with_io(
+        TAPS_GROUP,
+        [(VECTOR, "UV")] + [(FLOAT, n) for n in ("X", "Y", "W", "H", "Atlas Width", "Atlas Height", "Repeat")],
+        [(VECTOR, "UV " + c) for c in TAP_CORNERS] + [(FLOAT, "Fx"), (FLOAT, "Fy")], (-1200, 900))
     sep = tree.nodes.new("ShaderNodeSeparateXYZ")
     sep.location = (-1000, 200)
     tree.links.new(gin.outputs["UV"], sep.inputs[0])
@@ -326,19 +318,11 @@ def bilinear_group():
     tree = _find_group(BILINEAR_GROUP)
     if tree is not None:
         return tree
-    tree = _new_group(BILINEAR_GROUP)
-    corners = ("00", "10", "01", "11")
-    for c in corners:
-        _add_socket(tree, "INPUT", "NodeSocketColor", "Color " + c)
-        _add_socket(tree, "INPUT", "NodeSocketFloat", "Alpha " + c)
-    for name in ("Fx", "Fy"):
-        _add_socket(tree, "INPUT", "NodeSocketFloat", name)
-    _add_socket(tree, "OUTPUT", "NodeSocketColor", "Color")
-    _add_socket(tree, "OUTPUT", "NodeSocketFloat", "Alpha")
-    gin = tree.nodes.new("NodeGroupInput")
-    gin.location = (-600, 0)
-    gout = tree.nodes.new("NodeGroupOutput")
-    gout.location = (400, 0)
+    tree, gin, gout = _group_with_io(
+        BILINEAR_GROUP,
+        [io for c in TAP_CORNERS for io in ((COLOR, "Color " + c), (FLOAT, "Alpha " + c))]
+        + [(FLOAT, "Fx"), (FLOAT, "Fy")],
+        [(COLOR, "Color"), (FLOAT, "Alpha")], (-600, 400))
     fx, fy = gin.outputs["Fx"], gin.outputs["Fy"]
     for kind, data_type, y in (("Color", "VECTOR", 200), ("Alpha", "FLOAT", -200)):
         bottom = _mix(tree, data_type, fx, gin.outputs[kind + " 00"], gin.outputs[kind + " 10"], (-300, y + 100))
@@ -350,15 +334,9 @@ def bilinear_group():
 def atlas_table_group(name, atlas):
     """Level → the level's frame X, Y and size W, H in the atlas: a step sum over the levels,
     Σ_k [Level ≥ k]·(v_k − v_(k−1)), exact for integer levels."""
-    tree = _new_group(name)
-    _add_socket(tree, "INPUT", "NodeSocketFloat", "Level")
     keys = ("X", "Y", "W", "H")
-    for key in keys:
-        _add_socket(tree, "OUTPUT", "NodeSocketFloat", key)
-    gin = tree.nodes.new("NodeGroupInput")
-    gin.location = (-400, 0)
-    gout = tree.nodes.new("NodeGroupOutput")
-    gout.location = (300 + 150 * len(atlas.levels), 0)
+    tree, gin, gout = _group_with_io(name, [(FLOAT, "Level")], [(FLOAT, key) for key in keys],
+                                     (-400, 300 + 150 * len(atlas.levels)))
     totals = {key: 0.0 for key in keys}
     previous = {key: 0.0 for key in keys}
     for k, place in enumerate(atlas.levels):
@@ -408,7 +386,6 @@ class AtlasLod:
     pixel_size: float
 
 
-LOD_INPUTS = ("Texels per Unit", "Pixel Angle", "Pixel Size")
 
 
 def _uv_source(tree, gin, has_vector, location):
@@ -459,7 +436,7 @@ def _sample_atlas(tree, image, taps, blend, j, y):
         bilinear = tree.nodes.new("ShaderNodeGroup")
         bilinear.node_tree = bilinear_group()
         bilinear.location = (-1000, y - 300 * k)
-        for i, corner in enumerate(("00", "10", "01", "11")):
+        for i, corner in enumerate(TAP_CORNERS):
             tex = tree.nodes.new("ShaderNodeTexImage")
             tex.name = tex.label = "Lobe %d level %s %s" % (j, "low" if k == 0 else "high", corner)
             tex.image = image

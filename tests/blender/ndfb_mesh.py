@@ -4,26 +4,13 @@ Only the standard library, numpy and bpy (both ship with Blender) are used. Arra
 as numpy buffers; a Blender mesh is turned into the plain arrays the C API takes.
 """
 import ctypes
+import os
+import sys
+
 import numpy as np
 
-NDFB_PER_CORNER = 0
-NDFB_PER_VERTEX = 1
-
-
-class Mesh(ctypes.Structure):
-    _fields_ = [
-        ("struct_size", ctypes.c_uint32),
-        ("positions", ctypes.POINTER(ctypes.c_float)),
-        ("vertex_count", ctypes.c_size_t),
-        ("face_sizes", ctypes.POINTER(ctypes.c_uint32)),
-        ("face_count", ctypes.c_size_t),
-        ("corner_vertices", ctypes.POINTER(ctypes.c_uint32)),
-        ("corner_count", ctypes.c_size_t),
-        ("normals", ctypes.POINTER(ctypes.c_float)),
-        ("normal_domain", ctypes.c_int),
-        ("uvs", ctypes.POINTER(ctypes.c_float)),
-        ("uv_domain", ctypes.c_int),
-    ]
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "addon"))
+from ndfbake.native import Mesh  # noqa: E402  (one definition of ndfb_mesh, the add-on's)
 
 
 class SplitStats(ctypes.Structure):
