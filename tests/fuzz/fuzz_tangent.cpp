@@ -95,27 +95,34 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
                            magnitudes.size());
     check(status, "ndfb_tangents");
     if (status != NDFB_OK) return 0;
+    auto dump_mesh = [&](size_t c, const float* t) {
+        std::fprintf(stderr, "corner %zu of %zu: tangent (%g, %g, %g) sign %g\n", c, corner_count, t[0], t[1], t[2],
+                     t[3]);
+        for (size_t f = 0, first = 0; f < face_count; first += face_sizes[f++]) {
+            std::fprintf(stderr, "face %zu:", f);
+            for (size_t k = first; k < first + face_sizes[f]; ++k) {
+                const uint32_t v = corners[k];
+                const float* n = normal_domain == NDFB_PER_VERTEX ? &normals[v * 3] : &normals[k * 3];
+                const float* uv = uv_domain == NDFB_PER_VERTEX ? &uvs[v * 2] : &uvs[k * 2];
+                std::fprintf(stderr, " [c%zu v%u p(%.9g %.9g %.9g) n(%.9g %.9g %.9g) uv(%.9g %.9g)]", k, v, positions[v * 3],
+                             positions[v * 3 + 1], positions[v * 3 + 2], n[0], n[1], n[2], uv[0], uv[1]);
+            }
+            std::fprintf(stderr, "\n");
+        }
+    };
     for (size_t c = 0; c < corner_count; ++c) {
         const float* t = &tangents[c * 4];
-        for (int k = 0; k < 4; ++k) require(std::isfinite(t[k]), "tangents are finite");
+        for (int k = 0; k < 4; ++k)
+            if (!std::isfinite(t[k])) {
+                dump_mesh(c, t);
+                require(false, "tangents are finite");
+            }
         // Unit, or exactly zero: MikkTSpace leaves a group's tangent at zero when its projection on
         // the normal's plane vanishes (VNotZero guard), and so does our implementation; see
         // corpus/tangent/zero_tangent_degenerate_fan.
         const float length = std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
         if (!(std::abs(length - 1.0f) < 1e-3f || length == 0.0f)) {
-            std::fprintf(stderr, "corner %zu of %zu: tangent (%g, %g, %g) sign %g\n", c, corner_count, t[0], t[1], t[2],
-                         t[3]);
-            for (size_t f = 0, first = 0; f < face_count; first += face_sizes[f++]) {
-                std::fprintf(stderr, "face %zu:", f);
-                for (size_t k = first; k < first + face_sizes[f]; ++k) {
-                    const uint32_t v = corners[k];
-                    const float* n = normal_domain == NDFB_PER_VERTEX ? &normals[v * 3] : &normals[k * 3];
-                    const float* uv = uv_domain == NDFB_PER_VERTEX ? &uvs[v * 2] : &uvs[k * 2];
-                    std::fprintf(stderr, " [c%zu v%u p(%g %g %g) n(%g %g %g) uv(%g %g)]", k, v, positions[v * 3],
-                                 positions[v * 3 + 1], positions[v * 3 + 2], n[0], n[1], n[2], uv[0], uv[1]);
-                }
-                std::fprintf(stderr, "\n");
-            }
+            dump_mesh(c, t);
             require(false, "tangents are unit");
         }
         require(t[3] == 1.0f || t[3] == -1.0f, "bitangent sign is +-1");

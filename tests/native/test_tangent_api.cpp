@@ -166,6 +166,25 @@ TEST_F(TangentApi, AMeshWithoutSplitsKeepsItsVertexNumbering)
     EXPECT_EQ(corner_to_vertex, m.corners);
 }
 
+// Found by fuzz_tangent (corpus/tangent/huge-uv-tiny-positions): UV areas past float's range on a
+// face of 1e-34-sized positions and normals of length 1e10 or 0.
+TEST_F(TangentApi, FramesStayFiniteWhereUVAreasOverflowFloat)
+{
+    TestMesh m;
+    const uint32_t a = m.vertex({1.01583363e-34f, 1.01583363e-34f, 1.68155816e-44f});
+    const uint32_t b = m.vertex({0, 0, 0}), c = m.vertex({1.01583363e-34f, 1.01583363e-34f, 1.01583363e-34f});
+    const float big = -6.97300531e+09f;
+    m.face({a, a, b, c},
+           {{{720.549683f, -3.06676017e+22f}}, {{big, big}}, {{big, big}}, {{1.31716346e+32f, -8.58993408e+09f}}},
+           std::vector<Vec3>{{big, big, big}, {big, big, big}, {0, 0, 0}, {0, 0, 0}});
+    const ndfb_mesh v = view(m);
+    std::vector<float> tangents(4 * 4), magnitudes(4 * 2);
+    ASSERT_EQ(ndfb_tangents(ctx_, &v, 1, tangents.data(), tangents.size(), magnitudes.data(), magnitudes.size()),
+              NDFB_OK) << error();
+    for (float t : tangents) EXPECT_TRUE(std::isfinite(t));
+    for (float t : magnitudes) EXPECT_TRUE(std::isfinite(t));
+}
+
 TEST_F(TangentApi, TexelDensityIsTheSquareRootOfUVAreaOverWorldArea)
 {
     TestMesh m = unit_square();  // 2 x 2 world units mapped onto the unit UV square

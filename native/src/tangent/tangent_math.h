@@ -25,20 +25,23 @@ inline bool mikk_not_zero(float v) { return std::fabs(v) > 1.17549435e-38f; }
 
 inline uint32_t float_bits(float v) { return std::bit_cast<uint32_t>(v); }
 
-// v projected onto the plane orthogonal to n, then normalized; a zero result stays zero (the
-// reference keeps zero vectors rather than producing NaN, and so must we to match it).
-inline Vec3 project_normalize(const Vec3& n, const Vec3& v)
-{
-    const Vec3 p = v - n * dot(n, v);
-    const float len = std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
-    return len != 0.0f ? p * (1.0f / len) : p;
-}
-
+// v normalized; a zero vector stays zero (the reference keeps zero vectors rather than producing
+// NaN, and so must we to match it). Where the squared length overflows (components past ~1e19,
+// e.g. from normals that were never normalized), v is scaled down first; a vector with an infinite
+// component has no direction and becomes zero.
 inline Vec3 normalize_keep_zero(const Vec3& v)
 {
     const float len = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
-    return len != 0.0f ? v * (1.0f / len) : v;
+    if (len != 0.0f && std::isfinite(len)) return v * (1.0f / len);
+    if (len == 0.0f) return v;
+    const float largest = std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
+    if (!std::isfinite(largest)) return Vec3{};
+    const Vec3 s = v * (1.0f / largest);
+    return s * (1.0f / std::sqrt(s.x * s.x + s.y * s.y + s.z * s.z));
 }
+
+// v projected onto the plane orthogonal to n, then normalized as normalize_keep_zero does.
+inline Vec3 project_normalize(const Vec3& n, const Vec3& v) { return normalize_keep_zero(v - n * dot(n, v)); }
 
 // 1/sqrt(x) for x > 0 to ~2e-7 relative: the hardware estimate refined by one Newton step, about
 // twice as fast as a square root followed by a division, which dominate the per-corner work.

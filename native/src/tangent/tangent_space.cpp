@@ -308,7 +308,7 @@ private:
 
 #if defined(__SSE2__)
     // Lanes 0..2 are the corners; lane 3 is zero and ignored. Returns false (and leaves the work to
-    // the scalar path) when a squared length is positive but below FLT_MIN.
+    // the scalar path) when a squared length is positive but below FLT_MIN, or not finite.
     static bool simd_contributions(const std::array<Vec3, 3>& p, const Vec3 (&n)[3], const Vec3& tangent, float* cx,
                                    float* cy, float* cz, float* w)
     {
@@ -336,8 +336,12 @@ private:
                      ptz = _mm_sub_ps(tz, _mm_mul_ps(nz, dt));
         const __m128 l1 = dot3(q1x, q1y, q1z, q1x, q1y, q1z), l2 = dot3(q2x, q2y, q2z, q2x, q2y, q2z),
                      lt = dot3(ptx, pty, ptz, ptx, pty, ptz);
-        const __m128 zero = _mm_setzero_ps(), tiny = _mm_set1_ps(1.17549435e-38f);
-        auto risky = [&](__m128 x) { return _mm_and_ps(_mm_cmpgt_ps(x, zero), _mm_cmplt_ps(x, tiny)); };
+        const __m128 zero = _mm_setzero_ps(), tiny = _mm_set1_ps(1.17549435e-38f), huge = _mm_set1_ps(3.40282347e+38f);
+        // Below FLT_MIN the estimate is unusable; past FLT_MAX (overflowed: normals that were
+        // never normalized, huge coordinates) or NaN it gives NaN: the scalar path handles both.
+        auto risky = [&](__m128 x) {
+            return _mm_or_ps(_mm_and_ps(_mm_cmpgt_ps(x, zero), _mm_cmplt_ps(x, tiny)), _mm_cmpnle_ps(x, huge));
+        };
         if (_mm_movemask_ps(_mm_or_ps(_mm_or_ps(risky(l1), risky(l2)), risky(lt))) & 7) return false;
         const __m128 one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f), three_halves = _mm_set1_ps(1.5f);
         auto rsqrt = [&](__m128 x) {  // one Newton step; lanes with x == 0 give 0, like normalizing zero
