@@ -272,7 +272,7 @@ NDFB_API void ndfb_mesh_init(ndfb_mesh* mesh);
 
 /* tangents: tangent_count = corner_count * 4. magnitudes (may be NULL with magnitude_count 0):
  * corner_count * 2 floats, the world length per unit of U and of V at the corner (|dP/du|,
- * |dP/dv|, averaged over the corner's group like the tangent). */
+ * |dP/dv|, averaged over the corner's group like the tangent; capped at 1e30). */
 NDFB_API ndfb_status ndfb_tangents(ndfb_context ctx, const ndfb_mesh* mesh, uint32_t threads, float* tangents,
                                    size_t tangent_count, float* magnitudes, size_t magnitude_count);
 

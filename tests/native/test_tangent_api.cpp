@@ -185,6 +185,23 @@ TEST_F(TangentApi, FramesStayFiniteWhereUVAreasOverflowFloat)
     for (float t : magnitudes) EXPECT_TRUE(std::isfinite(t));
 }
 
+// Also from fuzz_tangent: coordinates near float's range over a tiny UV area make |dP/du| ~1e41.
+TEST_F(TangentApi, DerivativeLengthsPastFloatRangeAreCappedAndTangentsStayUnit)
+{
+    TestMesh m;
+    const uint32_t a = m.vertex({0, 0, 0}), b = m.vertex({3e38f, 0, 0}), c = m.vertex({0, 3e38f, 0});
+    m.face({a, b, c}, {{{0, 0}}, {{1e-3f, 0}}, {{0, 1e-3f}}}, kUp);
+    const ndfb_mesh v = view(m);
+    std::vector<float> tangents(3 * 4), magnitudes(3 * 2);
+    ASSERT_EQ(ndfb_tangents(ctx_, &v, 1, tangents.data(), tangents.size(), magnitudes.data(), magnitudes.size()),
+              NDFB_OK) << error();
+    for (int corner = 0; corner < 3; ++corner) {
+        EXPECT_NEAR(tangents[corner * 4], 1.0f, 1e-6f);  // +X, as dP/du points
+        EXPECT_EQ(magnitudes[corner * 2], 1e30f);
+        EXPECT_EQ(magnitudes[corner * 2 + 1], 1e30f);
+    }
+}
+
 TEST_F(TangentApi, TexelDensityIsTheSquareRootOfUVAreaOverWorldArea)
 {
     TestMesh m = unit_square();  // 2 x 2 world units mapped onto the unit UV square

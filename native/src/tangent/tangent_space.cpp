@@ -1,6 +1,7 @@
 #include "tangent/tangent_space.h"
 
 #include <algorithm>
+#include <utility>
 #include <array>
 #include <atomic>
 #include <cstring>
@@ -44,6 +45,33 @@ float signed_uv_area(const Vec2& t1, const Vec2& t2, const Vec2& t3)
 {
     const float t21x = t2.x - t1.x, t21y = t2.y - t1.y, t31x = t3.x - t1.x, t31y = t3.y - t1.y;
     return t21x * t31y - t21y * t31x;
+}
+
+// Past this, |dP/du| (world length per UV unit) is capped: a finite float for any input, whose
+// group averages (at most π per corner angle times the corners of a group) stay finite too.
+constexpr double kMaxDerivativeLength = 1e30;
+
+// |dP/du| and |dP/dv| of a triangle (eqs. 42/43 over the UV area), in double: products of float
+// coordinates near their range overflow float (found by fuzz_tangent). Only the magnitudes take
+// this path; the tangent's direction stays in float, bit for bit as the reference computes it.
+std::pair<float, float> derivative_lengths(const Vec3& v1, const Vec3& v2, const Vec3& v3, const Vec2& t1,
+                                           const Vec2& t2, const Vec2& t3)
+{
+    const double t21x = double(t2.x) - t1.x, t21y = double(t2.y) - t1.y;
+    const double t31x = double(t3.x) - t1.x, t31y = double(t3.y) - t1.y;
+    const double area = std::fabs(t21x * t31y - t21y * t31x);
+    double s2 = 0.0, t2_ = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const double d1 = double(v2[k]) - v1[k], d2 = double(v3[k]) - v1[k];
+        const double os = d1 * t31y - d2 * t21y, ot = -d1 * t31x + d2 * t21x;
+        s2 += os * os;
+        t2_ += ot * ot;
+    }
+    auto length = [&](double squared) {
+        const double value = std::sqrt(squared) / area;
+        return float(value < kMaxDerivativeLength ? value : kMaxDerivativeLength);  // NaN (0/0) too
+    };
+    return {length(s2), length(t2_)};
 }
 
 bool same_position(const Vec3& a, const Vec3& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
@@ -245,10 +273,14 @@ private:
                     const float len_s2 = os.x * os.x + os.y * os.y + os.z * os.z;
                     const float len_t2 = ot.x * ot.x + ot.y * ot.y + ot.z * ot.z;
                     const float sign = (flags & kPreserving) ? 1.0f : -1.0f;
-                    if (mikk_not_zero(len_s2)) tangent = os * (sign / std::sqrt(len_s2));
-                    if (!frame_.empty())
-                        frame_[t] = {flat(tangent), std::sqrt(len_s2) / std::fabs(area),
-                                     std::sqrt(len_t2) / std::fabs(area)};
+                    // The reference's float arithmetic; where |os|² overflows it would give a zero
+                    // tangent, so that case is scaled down first (normalize_keep_zero).
+                    if (mikk_not_zero(len_s2))
+                        tangent = std::isfinite(len_s2) ? os * (sign / std::sqrt(len_s2)) : normalize_keep_zero(os) * sign;
+                    if (!frame_.empty()) {
+                        const auto [mag_s, mag_t] = derivative_lengths(v1, v2, v3, t1, t2, t3);
+                        frame_[t] = {flat(tangent), mag_s, mag_t};
+                    }
                     is_good = mikk_not_zero(len_s2) && mikk_not_zero(len_t2);
                 }
                 if (!is_good) {
