@@ -42,13 +42,14 @@ REFERENCE_SAMPLES = 512
 SAMPLES = 16
 ACCEPTED_RATIO = 0.5                      # the issue: ndfbake's error at most half the naive map's
 REGIONS = ("ground_far", "spheres_far")   # where filtering matters; "all", "ground_near" printed too
-# The issue's 0.5 is not met yet (README, "Image error"): wide lobes lose energy the fine normals
-# do not (GGX masking at grazing angles), so ndfbake renders darker than the reference. Until it
-# is, the test holds the figures measured on 2026-11-21 (128x72) as regression bounds, with a
-# margin for sampling noise, and prints the acceptance verdict beside them.
-REGRESSION_BOUNDS = {("eevee", "ground_far"): 1.45, ("eevee", "spheres_far"): 1.35,
-                     ("cycles", "ground_far"): 1.15, ("cycles", "spheres_far"): 1.45,
-                     ("cycles", "all"): 0.85, ("cycles", "ground_near"): 0.5}
+# The issue's 0.5 is met on the far spheres in EEVEE only (README, "Image error"): on the ground,
+# seen at grazing angles, widened GGX lobes mask light the fine normals do not, so ndfbake renders
+# it darker than the reference. Until that is fixed, the test holds the figures measured on
+# 2026-11-21 (128x72) as regression bounds, with a margin for sampling noise, and prints the
+# acceptance verdict beside them.
+REGRESSION_BOUNDS = {("eevee", "ground_far"): 1.35, ("eevee", "spheres_far"): ACCEPTED_RATIO,
+                     ("cycles", "ground_far"): 1.0, ("cycles", "spheres_far"): 1.5,
+                     ("cycles", "all"): 0.8, ("cycles", "ground_near"): 0.5}
 MIN_WINDOWS = 40                          # 4x4 windows a region needs for its figure to mean anything
 BAKE_SCRIPT = os.path.join(h.REPO, "examples", "bake_blend.py")
 

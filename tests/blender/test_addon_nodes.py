@@ -4,11 +4,11 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 
 A 32² normal map is baked; for every lobe slot j and levels 0 and 2 a plane shows, as emission,
 the decode group's outputs read from levelLL_lobej.exr (Closest interpolation, whole texels per
-pixel under an orthographic camera): (widened roughness, amplitude, weight) on one row of planes and the
+pixel under an orthographic camera): (widened roughness, 0, weight) on one row of planes and the
 tangent-space normal colour on the other. The renders (Cycles and EEVEE, Standard view transform,
 no pixel filter) must match a NumPy evaluation of the rule written from brdf.h, independently of
-nodes.py:  α'² = min(α² + 1.5/κ, 1), α = roughness², amplitude = I(α)/I(α'),
-I(a) = 1 + a²·artanh(k)/k with k = √(1 − a²) (2 at a = 1), κ = (3R − R³)/(1 − R²).
+nodes.py:  α'² = min(α² + 1.5/κ, 1), α = roughness², κ = (3R − R³)/(1 − R²). (brdf.h's amplitude
+is not part of the shading: see nodes.py.)
 """
 import os
 import sys
@@ -23,16 +23,8 @@ SIZE = 32
 ROUGHNESS = 0.3
 
 
-def sphere_integral(a):
-    a = np.asarray(a, dtype=np.float64)
-    k = np.sqrt(np.maximum(1.0 - a * a, 0.0))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(k > 1e-6, np.arctanh(np.minimum(k, 1 - 1e-12)) / np.maximum(k, 1e-300), 1.0)
-    return 1.0 + a * a * ratio
-
-
 def reference(rgba, roughness, widening=1.5):
-    """weight, normal colour, widened roughness, amplitude per texel, from brdf.h's rule."""
+    """weight, normal colour and widened roughness per texel, from brdf.h's rule."""
     alpha_j = rgba[..., 0].astype(np.float64)
     v = rgba[..., 1:4].astype(np.float64)
     r = v / np.maximum(alpha_j, 1e-6)[..., None]
@@ -44,8 +36,7 @@ def reference(rgba, roughness, widening=1.5):
         inv_kappa = np.where(kappa > 0, 1.0 / kappa, 1e6)
     a = roughness ** 2
     widened = np.sqrt(np.minimum(a * a + widening * inv_kappa, 1.0))
-    amplitude = sphere_integral(a) / sphere_integral(widened)
-    return alpha_j, mu * 0.5 + 0.5, np.sqrt(widened), amplitude
+    return alpha_j, mu * 0.5 + 0.5, np.sqrt(widened)
 
 
 def image_rgba(image):
@@ -75,7 +66,6 @@ def probe_material(name, image, output):
     else:
         combine = tree.nodes.new("ShaderNodeCombineXYZ")
         tree.links.new(dec.outputs["Roughness"], combine.inputs["X"])
-        tree.links.new(dec.outputs["Amplitude"], combine.inputs["Y"])
         tree.links.new(dec.outputs["Weight"], combine.inputs["Z"])
         tree.links.new(combine.outputs[0], emission.inputs["Color"])
     tree.links.new(emission.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
@@ -144,19 +134,17 @@ def test_decode_group_matches_the_rule_in_both_engines():
             h.expect(np.isfinite(rgba).all(), "level %d lobe %d has non-finite texels" % (level, j))
             h.expect(np.all(np.linalg.norm(rgba[..., 1:], axis=-1) <= rgba[..., 0] * 1.001 + 1e-3),
                      "level %d lobe %d: |alpha r| > alpha: the alpha channel is not read raw" % (level, j))
-            weight, normal, rough, amplitude = reference(rgba, ROUGHNESS)
+            weight, normal, rough = reference(rgba, ROUGHNESS)
             scale = SIZE // rgba.shape[0]  # texels of level 2 cover scale x scale pixels
             up = lambda a: np.repeat(np.repeat(a, scale, axis=0), scale, axis=1)  # noqa: E731
-            expected[level, j] = (up(np.stack([rough, amplitude, weight], axis=-1)), up(normal))
+            expected[level, j] = (up(np.stack([rough, np.zeros_like(rough), weight], axis=-1)), up(normal))
             # The comparison must be able to tell the rule from its neighbours (2/κ, Filament's).
             occupied = weight > 1e-3
             other = reference(rgba, ROUGHNESS, widening=2.0)[2]
             sensitivity = float(np.abs(other - rough)[occupied].max()) if occupied.any() else 0.0
-            print("level %d lobe %d: %d occupied texels, roughness' %.3f..%.3f, amplitude %.3f..%.3f, "
-                  "1.5/κ vs 2/κ differ by up to %.3f" % (
-                      level, j, int(occupied.sum()), float(rough[occupied].min(initial=1)),
-                      float(rough[occupied].max(initial=0)), float(amplitude[occupied].min(initial=1)),
-                      float(amplitude[occupied].max(initial=0)), sensitivity))
+            print("level %d lobe %d: %d occupied texels, roughness' %.3f..%.3f, 1.5/κ vs 2/κ differ by up to %.3f"
+                  % (level, j, int(occupied.sum()), float(rough[occupied].min(initial=1)),
+                     float(rough[occupied].max(initial=0)), sensitivity))
             if level == 2 and j == 0:
                 h.expect(sensitivity > 0.02, "level 2 does not exercise the widening rule")
 
@@ -173,7 +161,7 @@ def test_decode_group_matches_the_rule_in_both_engines():
                     # Half-float textures and float32 nodes: 2e-3 absolute is plenty.
                     if output == "scalars":
                         err = np.abs(block - want_scalars)
-                        for c, what in enumerate(("roughness", "amplitude", "weight")):
+                        for c, what in enumerate(("roughness", "(unused)", "weight")):
                             mask = occupied if c < 2 else np.ones_like(occupied)
                             worst = float(err[..., c][mask].max()) if mask.any() else 0.0
                             h.expect(worst < 2e-3, "%s level %d lobe %d %s: max error %.4g" % (
@@ -187,14 +175,6 @@ def test_decode_group_matches_the_rule_in_both_engines():
         h.cleanup(directory)
 
 
-def test_sphere_integral_limits():
-    # The reference itself: I(1) = 2, I(0) = 1, and brdf.h's closed form at a = 0.5.
-    h.expect(abs(sphere_integral(1.0) - 2.0) < 1e-9, "I(1) != 2")
-    h.expect(abs(sphere_integral(1e-6) - 1.0) < 1e-6, "I(0) != 1")
-    k = np.sqrt(0.75)
-    h.expect(abs(sphere_integral(0.5) - (1 + 0.25 * np.arctanh(k) / k)) < 1e-12, "I(0.5)")
-
-
 if __name__ == "__main__":
     h.import_addon()
-    h.run([test_sphere_integral_limits, test_decode_group_matches_the_rule_in_both_engines])
+    h.run([test_decode_group_matches_the_rule_in_both_engines])
