@@ -108,6 +108,32 @@ def settings_from_material(material):
 PENDING_SUFFIX = ".pending"
 
 
+@dataclass
+class LodPlan:
+    """The scene's level of detail for one material (scene_lod.py): levels to bake, and the
+    footprint constants of the node group."""
+    levels: int
+    texels_per_unit: float
+    pixel_angle: float
+    pixel_size: float
+    footprint_max: float
+
+
+def _plan_lod(material, scan, settings):
+    """A LodPlan from the scene's active camera, or None: level 0 filtered by the renderer (that
+    setting, no camera, or no rendered object with UV area uses the material)."""
+    scene = bpy.context.scene
+    if settings.level_of_detail != "SCENE" or scene.camera is None or scene.camera.type != "CAMERA":
+        return None
+    uv_map = material.node_tree.nodes[scan.targets[0].normal_map].uv_map
+    needs = scene_lod.material_lod(scene, material, tuple(scan.image.size), uv_map)
+    if needs.texels_per_unit <= 0.0:
+        return None
+    camera = scene_lod.camera_footprint(scene, scene.camera)
+    return LodPlan(levels=needs.levels, texels_per_unit=needs.texels_per_unit, pixel_angle=camera.pixel_angle,
+                   pixel_size=camera.pixel_size, footprint_max=needs.footprint_max)
+
+
 def prepare(material, settings=None, pending=False):
     """Checks the material and the library; returns a BakeJob or raises BakeError. Changes nothing.
     pending: the native bake writes into a sibling folder '<lobe folder>.pending' that finish()
@@ -133,32 +159,13 @@ def prepare(material, settings=None, pending=False):
                         % absolute)
     if settings.level_of_detail not in ("SCENE", "RENDERER"):
         raise BakeError("BAD_SETTINGS", "level of detail must be SCENE or RENDERER, got %r" % settings.level_of_detail)
-    lod = None
-    scene = bpy.context.scene
-    if settings.level_of_detail == "SCENE" and scene.camera is not None and scene.camera.type == "CAMERA":
-        uv_map = material.node_tree.nodes[scan.targets[0].normal_map].uv_map
-        needs = scene_lod.material_lod(scene, material, tuple(scan.image.size), uv_map)
-        if needs.texels_per_unit > 0.0:
-            camera = scene_lod.camera_footprint(scene, scene.camera)
-            lod = LodPlan(levels=needs.levels, texels_per_unit=needs.texels_per_unit,
-                          pixel_angle=camera.pixel_angle, pixel_size=camera.pixel_size,
-                          footprint_max=needs.footprint_max)
     return BakeJob(material_name=material.name, image_path=scan.image_path, folder=relative,
                    out_dir=absolute + PENDING_SUFFIX if pending else absolute, final_dir=absolute,
                    wrap=native.WRAP_REPEAT if scan.wrap == "REPEAT" else native.WRAP_CLAMP,
                    roughness=min(max(scan.roughness, 0.01), 1.0), settings=settings,
-                   targets=[(t.principled, t.normal_map, t.image_texture) for t in scan.targets], lod=lod)
+                   targets=[(t.principled, t.normal_map, t.image_texture) for t in scan.targets],
+                   lod=_plan_lod(material, scan, settings))
 
-
-@dataclass
-class LodPlan:
-    """The scene's level of detail for one material (scene_lod.py): levels to bake, and the
-    footprint constants of the node group."""
-    levels: int
-    texels_per_unit: float
-    pixel_angle: float
-    pixel_size: float
-    footprint_max: float
 
 
 # ---- step 2: the native bake (thread-safe: no bpy) ---------------------------------------------
