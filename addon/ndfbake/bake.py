@@ -438,6 +438,8 @@ def finish(job):
                             "bypassed": []})
             node, bypassed = nodes.insert_group_node(tree, group, principled, normal_map, texture)
             targets[-1].update(group_node=node.name, bypassed=bypassed)
+            if job.lod is not None and bpy.context.scene.camera is not None:
+                nodes.drive_lod_inputs(tree, node, bpy.context.scene, bpy.context.scene.camera)
     except Exception as e:
         # A bug, not bad input: put the material back as it was before any bake, drop this bake's
         # images and files, and say so (no half-built material is left behind).

@@ -531,6 +531,57 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     return tree
 
 
+def drive_lod_inputs(material_tree, node, scene, camera_object):
+    """Drivers that keep the group node's Pixel Angle (perspective) or Pixel Size (orthographic)
+    equal to scene_lod.camera_footprint's as the camera's lens, sensor or the render resolution
+    change (a 50% preview, a focal-length animation). Simple expressions only: Blender evaluates
+    them without Python, so they work in files whose scripts are not trusted. Panoramic cameras
+    and the texel density (a property of the meshes) keep their baked values."""
+    cam = camera_object.data
+    if cam.type not in {"PERSP", "ORTHO"}:
+        return
+    if cam.sensor_fit == "AUTO":
+        sensor, pixels = "sensor_width", "max(resx * ax, resy * ay)"
+    elif cam.sensor_fit == "HORIZONTAL":
+        sensor, pixels = "sensor_width", "resx * ax"
+    else:
+        sensor, pixels = "sensor_height", "resy * ay"
+    pixels = "(%s * pct / 100)" % pixels
+    if cam.type == "PERSP":
+        socket, expression, camera_vars = "Pixel Angle", "size / max(lens, 0.001) / " + pixels, (
+            ("size", sensor), ("lens", "lens"))
+    else:
+        socket, expression, camera_vars = "Pixel Size", "size / " + pixels, (("size", "ortho_scale"),)
+    fcurve = node.inputs[socket].driver_add("default_value")
+    driver = fcurve.driver
+    driver.type = "SCRIPTED"
+    driver.expression = expression
+    scene_vars = (("resx", "render.resolution_x"), ("resy", "render.resolution_y"),
+                  ("ax", "render.pixel_aspect_x"), ("ay", "render.pixel_aspect_y"),
+                  ("pct", "render.resolution_percentage"))
+    for (name, path), (id_type, owner) in [(v, ("CAMERA", cam)) for v in camera_vars] + \
+                                          [(v, ("SCENE", scene)) for v in scene_vars]:
+        var = driver.variables.new()
+        var.name = name
+        var.type = "SINGLE_PROP"
+        var.targets[0].id_type = id_type
+        var.targets[0].id = owner
+        var.targets[0].data_path = path
+
+
+def _remove_drivers(material_tree, node_name):
+    """Drops the drivers of the named node's inputs; and the tree's animation data when nothing
+    else is left in it (the add-on created it)."""
+    animation = material_tree.animation_data
+    if animation is None:
+        return
+    prefix = 'nodes["%s"]' % node_name
+    for fcurve in [f for f in animation.drivers if f.data_path.startswith(prefix)]:
+        animation.drivers.remove(fcurve)
+    if not animation.drivers and animation.action is None and not animation.nla_tracks:
+        material_tree.animation_data_clear()
+
+
 def insert_group_node(material_tree, group_tree, principled, normal_map, image_texture):
     """Adds the group node beside `principled`, feeds it the Principled's inputs, and bypasses the
     Principled BSDF: every link leaving its BSDF output now leaves the group's. Returns the node and
@@ -594,6 +645,7 @@ def remove_group_node(material_tree, node_name, principled_name, bypassed):
     node = nodes.get(node_name)
     principled = nodes.get(principled_name)
     group_tree = node.node_tree if node is not None else None
+    _remove_drivers(material_tree, node_name)
     if node is not None and "BSDF" in node.outputs:
         for link in list(node.outputs["BSDF"].links):
             material_tree.links.remove(link)

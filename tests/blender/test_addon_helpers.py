@@ -152,6 +152,8 @@ def dump_material(material):
     data = dump_tree(material.node_tree)
     data["active_node"] = material.node_tree.nodes.active.name if material.node_tree.nodes.active else None
     data["custom"] = sorted(material.keys())
+    animation = material.node_tree.animation_data
+    data["drivers"] = sorted(f.data_path for f in animation.drivers) if animation is not None else None
     settings = {}
     for prop in material.bl_rna.properties:
         if prop.type in {"BOOLEAN", "INT", "FLOAT", "STRING", "ENUM"} and prop.identifier != "rna_type":

@@ -9,7 +9,8 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
   formula evaluated per pixel from the camera's intrinsics (independent of scene_lod's numpy).
 - The atlas path (table, taps, four Closest lookups, bilinear in nodes) renders exactly what Cycles'
   own bilinear (Linear) lookup of the level's file renders, with repeat across tile borders.
-- A bake with a camera writes only the levels the camera reaches, and one atlas per lobe.
+- A bake with a camera writes only the levels the camera reaches, and one atlas per lobe; the
+  group's pixel angle follows the lens and the resolution through drivers; revert removes them.
 """
 import math
 import os
@@ -246,11 +247,28 @@ def test_a_bake_with_a_camera_writes_only_the_levels_it_reaches():
         h.expect("level of detail from the camera" in result.summary, result.summary)
         group = material.node_tree.nodes["ndfbake"]
         h.expect(abs(group.inputs["Texels per Unit"].default_value - 64.0) < 0.01, "texel density on the node")
+        # The pixel angle follows the camera and the resolution through drivers that need no Python.
+        scene = bpy.context.scene
+        drivers = material.node_tree.animation_data.drivers
+        h.expect(len(drivers) == 1 and drivers[0].driver.is_simple_expression and drivers[0].driver.is_valid,
+                 "one valid simple-expression driver expected: %s" % [d.data_path for d in drivers])
+        baked_angle = group.inputs["Pixel Angle"].default_value
+        h.expect(abs(baked_angle - 36.0 / 50.0 / 64.0) < 1e-7, "pixel angle %r" % baked_angle)
+        scene.render.resolution_percentage = 50
+        scene.camera.data.lens = 25.0
+        bpy.context.view_layer.update()
+        driven = material.node_tree.nodes["ndfbake"].inputs["Pixel Angle"].default_value
+        print("  pixel angle %.6f at 100%%, 50 mm; %.6f at 50%%, 25 mm" % (baked_angle, driven))
+        h.expect(abs(driven - 4.0 * baked_angle) < 1e-7, "the driven pixel angle is %r, not 4x %r" % (
+            driven, baked_angle))
+        scene.render.resolution_percentage = 100
+        scene.camera.data.lens = 50.0
         h.expect(nodes.lobe_count(group.node_tree) == 2, "two lobes")
         bake.revert(material)
         h.expect(not os.path.exists(bpy.path.abspath(result.folder)), "revert left the folder")
         leftovers = [g.name for g in bpy.data.node_groups]
         h.expect(not leftovers, "revert left node groups: %s" % leftovers)
+        h.expect(material.node_tree.animation_data is None, "revert left the drivers' animation data")
     finally:
         h.cleanup(directory)
 
