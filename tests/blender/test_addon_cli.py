@@ -10,7 +10,6 @@ Space is sRGB), and an unrendered "Hidden" one. The script runs in a separate `b
 - an unknown material exits 2, changing nothing.
 """
 import os
-import subprocess
 import sys
 
 import bpy
@@ -18,20 +17,6 @@ import bpy
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import test_addon_helpers as h  # noqa: E402
 
-SCRIPT = os.path.join(h.REPO, "examples", "bake_blend.py")
-
-
-def run_script(blend, *args):
-    library, _ = h.arguments()
-    env = dict(os.environ, NDFBAKE_LIBRARY=library)
-    proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", blend,
-                           "--python-expr", "import sys; sys.dont_write_bytecode = True",  # keep addon/ clean
-                           "--python", SCRIPT, "--"] + list(args),
-                          env=env, capture_output=True, text=True, timeout=120)
-    lines = [l for l in proc.stdout.splitlines() if l.startswith(("baked", "FAILED", "reverted", "bake_blend"))]
-    lines += [l for l in proc.stderr.splitlines() if l.startswith("bake_blend")]
-    print("  bake_blend.py %s -> exit %d\n    %s" % (" ".join(args), proc.returncode, "\n    ".join(lines)))
-    return proc.returncode, proc.stdout + proc.stderr
 
 
 def reopen(blend):
@@ -54,7 +39,7 @@ def test_command_line_bake_and_revert():
         bpy.ops.wm.save_as_mainfile(filepath=blend)
         original = reopen(blend)
 
-        code, out = run_script(blend, "--max-lobes", "2")
+        code, out = h.run_bake_blend(blend, "--max-lobes", "2")
         h.expect(code == 1, "one failure must exit 1, got %d:\n%s" % (code, out))
         h.expect("baked Good into //Good.ndfbake: 2 lobes" in out, out)
         h.expect("FAILED Bad [COLOR_SPACE]: image 'srgb.png' has Color Space 'sRGB'" in out, out)
@@ -66,18 +51,18 @@ def test_command_line_bake_and_revert():
         h.expect(sorted(os.listdir(directory)) == ["Good.ndfbake", "normal.png", "scene.blend", "scene.blend1",
                                                    "srgb.png"], sorted(os.listdir(directory)))
 
-        code, out = run_script(blend, "--material", "Good", "--max-lobes", "1")
+        code, out = h.run_bake_blend(blend, "--material", "Good", "--max-lobes", "1")
         h.expect(code == 0, "re-bake of Good: exit %d\n%s" % (code, out))
         h.expect("baked Good into //Good.ndfbake: 1 lobe," in out, out)
 
-        code, out = run_script(blend, "--revert")
+        code, out = h.run_bake_blend(blend, "--revert")
         h.expect(code == 0, "revert: exit %d\n%s" % (code, out))
         h.expect("reverted Good" in out, out)
         h.expect(reopen(blend) == original, "the reverted file differs from the original")
         h.expect(not os.path.exists(os.path.join(directory, "Good.ndfbake")), "lobe folder left")
 
         mtime = os.path.getmtime(blend)
-        code, out = run_script(blend, "--material", "Nope")
+        code, out = h.run_bake_blend(blend, "--material", "Nope")
         h.expect(code == 2 and "no material named 'Nope'" in out, "unknown material: exit %d\n%s" % (code, out))
         h.expect(os.path.getmtime(blend) == mtime, "the .blend was saved after a usage error")
     finally:

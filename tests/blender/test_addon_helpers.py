@@ -8,12 +8,14 @@ the zip path instead. Not a test itself (ctest runs the files it lists).
 """
 import os
 import shutil
+import subprocess
 import sys
 import tempfile
 import time
 import traceback
 
 import bpy
+import numpy as np
 
 sys.dont_write_bytecode = True  # no __pycache__ in the source tree (addon/, tests/blender/)
 
@@ -218,3 +220,70 @@ def run(tests):
 
 def cleanup(directory):
     shutil.rmtree(directory, ignore_errors=True)
+
+
+def load_pixels(path):
+    """An image file's pixels as Blender reads them, (height, width, 4) float32, rows bottom to top."""
+    image = bpy.data.images.load(path)
+    width, height = image.size
+    pixels = np.empty(width * height * 4, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    bpy.data.images.remove(image)
+    return pixels.reshape(height, width, 4)
+
+
+def render_pixels(scene, path):
+    """Renders the scene with its own settings (the caller chose engine and file format) into
+    `path` and returns the saved image's pixels (load_pixels)."""
+    scene.render.filepath = path
+    bpy.ops.render.render(write_still=True)
+    return load_pixels(path)
+
+
+def run_bake_blend(blend, *args, timeout=120):
+    """examples/bake_blend.py on `blend` in a separate `blender -b`; prints its result lines and
+    returns (exit status, its whole output)."""
+    library, _ = arguments()
+    env = dict(os.environ, NDFBAKE_LIBRARY=library)
+    proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", blend,
+                           "--python-expr", "import sys; sys.dont_write_bytecode = True",  # keep addon/ clean
+                           "--python", os.path.join(REPO, "examples", "bake_blend.py"), "--"] + list(args),
+                          env=env, capture_output=True, text=True, timeout=timeout)
+    lines = [l for l in proc.stdout.splitlines() if l.startswith(("baked", "FAILED", "reverted", "bake_blend"))]
+    lines += [l for l in proc.stderr.splitlines() if l.startswith("bake_blend")]
+    print("  bake_blend.py %s -> exit %d\n    %s" % (" ".join(args), proc.returncode, "\n    ".join(lines)),
+          flush=True)
+    return proc.returncode, proc.stdout + proc.stderr
+
+
+# ---- tests in a real Blender window (under Xvfb) ---------------------------------------------------
+
+def finish_window_test(name, state, ok, message):
+    """Ends a window test: its scratch folder (state["dir"]) goes, PASS/FAIL is printed, and the
+    process exits 0 or 1 (a window has no --python-exit-code to rely on)."""
+    if "dir" in state:
+        cleanup(state["dir"])
+    print(("PASS " if ok else "FAIL ") + name + ": " + message, flush=True)
+    os._exit(0 if ok else 1)
+
+
+def run_window_test(name, state, step):
+    """Runs `step` from Blender's own event loop (bpy.app.timers; its return value is the delay
+    to the next call) until it calls finish_window_test. OUTDIR, the third argument after `--`
+    (else a temporary folder), goes to state["out"]; the add-on is imported first. An exception,
+    or time.time() passing state["deadline"], fails the test."""
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    state["out"] = os.path.abspath(argv[2]) if len(argv) > 2 else temp_dir("ndfb-%s-" % name)
+    os.makedirs(state["out"], exist_ok=True)
+    import_addon()
+    bpy.context.preferences.view.show_splash = False
+
+    def tick():
+        try:
+            if time.time() > state["deadline"]:
+                finish_window_test(name, state, False, "timed out in step %s" % state["step"])
+            return step()
+        except Exception:
+            traceback.print_exc()
+            finish_window_test(name, state, False, "exception")
+    bpy.app.timers.register(tick, first_interval=1.0)

@@ -24,7 +24,6 @@ normal maps synthesized by the library, the sunset HDR), built at 128x72:
   lists, and deletes the lobe folders.
 """
 import os
-import subprocess
 import sys
 
 import bpy
@@ -51,7 +50,6 @@ REGRESSION_BOUNDS = {("eevee", "ground_far"): 1.35, ("eevee", "spheres_far"): AC
                      ("cycles", "ground_far"): 1.0, ("cycles", "spheres_far"): 1.5,
                      ("cycles", "all"): 0.8, ("cycles", "ground_near"): 0.5}
 MIN_WINDOWS = 40                          # 4x4 windows a region needs for its figure to mean anything
-BAKE_SCRIPT = os.path.join(h.REPO, "examples", "bake_blend.py")
 
 
 def test_image_error_against_references():
@@ -160,18 +158,6 @@ def reopen(blend):
     return dump_file()
 
 
-def run_bake_script(blend, *args):
-    library, _ = h.arguments()
-    env = dict(os.environ, NDFBAKE_LIBRARY=library)
-    proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", blend,
-                           "--python-expr", "import sys; sys.dont_write_bytecode = True",  # keep addon/ clean
-                           "--python", BAKE_SCRIPT, "--"] + list(args),
-                          env=env, capture_output=True, text=True, timeout=300)
-    lines = [l for l in proc.stdout.splitlines() if l.startswith(("baked", "FAILED", "reverted", "bake_blend"))]
-    print("  bake_blend.py %s -> exit %d\n    %s" % (" ".join(args), proc.returncode, "\n    ".join(lines)), flush=True)
-    return proc.returncode, proc.stdout + proc.stderr
-
-
 def test_command_line_bake_changes_only_the_baked_materials():
     from ndfbake import bake, nodes
     directory = h.temp_dir()
@@ -183,7 +169,7 @@ def test_command_line_bake_changes_only_the_baked_materials():
         before = reopen(blend)
         counts_before = h.data_counts()
 
-        code, out = run_bake_script(blend, "--max-lobes", str(demo_scene.MAX_LOBES))
+        code, out = h.run_bake_blend(blend, "--max-lobes", str(demo_scene.MAX_LOBES), timeout=300)
         h.expect(code == 0, "bake_blend.py exited %d:\n%s" % (code, out))
         h.expect("baked %d of %d materials" % (len(expected), len(expected)) in out, out)
 

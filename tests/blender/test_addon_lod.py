@@ -114,14 +114,8 @@ def _render_cycles(path, width, height):
     scene.view_settings.view_transform = "Standard"
     scene.render.image_settings.file_format = "OPEN_EXR"
     scene.render.image_settings.color_depth = "32"
-    scene.render.filepath = path
     _resolution(width, height)
-    bpy.ops.render.render(write_still=True)
-    image = bpy.data.images.load(path)
-    pixels = np.empty(width * height * 4, dtype=np.float32)
-    image.pixels.foreach_get(pixels)
-    bpy.data.images.remove(image)
-    return pixels.reshape(height, width, 4)  # rows bottom-up
+    return h.render_pixels(scene, path)
 
 
 def test_the_level_of_detail_group_renders_the_footprint_formula():

@@ -89,10 +89,7 @@ def render(scene, engine, path, width, height):
     scene.cycles.device = "CPU"
     scene.eevee.taa_render_samples = 1
     scene.world = None
-    scene.render.filepath = path
-    bpy.ops.render.render(write_still=True)
-    image = bpy.data.images.load(path)
-    return image_rgba(image)
+    return h.render_pixels(scene, path)
 
 
 def test_decode_group_matches_the_rule_in_both_engines():

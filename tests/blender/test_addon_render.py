@@ -44,13 +44,7 @@ def setup_scene():
 
 def render(scene, engine, path):
     scene.render.engine = engine
-    scene.render.filepath = path
-    bpy.ops.render.render(write_still=True)
-    image = bpy.data.images.load(path)
-    px = np.empty(SIZE * SIZE * 4, dtype=np.float32)
-    image.pixels.foreach_get(px)
-    bpy.data.images.remove(image)
-    return px.reshape(SIZE, SIZE, 4)[..., :3]
+    return h.render_pixels(scene, path)[..., :3]
 
 
 def test_eevee_and_cycles_render_the_baked_material():
@@ -103,17 +97,9 @@ def test_white_furnace_keeps_the_energy_of_the_fine_normals():
         scene.cycles.samples = 64
         scene.cycles.use_denoising = False
         scene.cycles.device = "CPU"
-        size = 32
 
         def mean(name):
-            scene.render.engine = "CYCLES"
-            scene.render.filepath = os.path.join(directory, name + ".exr")
-            bpy.ops.render.render(write_still=True)
-            image = bpy.data.images.load(scene.render.filepath)
-            px = np.empty(size * size * 4, dtype=np.float32)
-            image.pixels.foreach_get(px)
-            bpy.data.images.remove(image)
-            return float(px.reshape(-1, 4)[:, :3].mean())
+            return float(render(scene, "CYCLES", os.path.join(directory, name + ".exr")).mean())
 
         plain = mean("plain")
         result = bake.bake_material(material, bake.BakeSettings(max_lobes=4))

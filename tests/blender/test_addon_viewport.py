@@ -19,7 +19,6 @@ holds, 1 otherwise (printed).
 import os
 import sys
 import time
-import traceback
 
 import bpy
 import numpy as np
@@ -34,10 +33,7 @@ state = {"step": "start", "deadline": time.time() + 240, "shots": 0}
 
 
 def _finish(ok, message):
-    if "dir" in state:
-        h.cleanup(state["dir"])
-    print(("PASS " if ok else "FAIL ") + "test_addon_viewport: " + message, flush=True)
-    os._exit(0 if ok else 1)
+    h.finish_window_test("test_addon_viewport", state, ok, message)
 
 
 def _view3d():
@@ -108,21 +104,10 @@ def _camera_frame():
     return (int(round(min(xs))), int(round(min(ys))), int(round(max(xs))), int(round(max(ys))))
 
 
-def _load_rgb(path):
-    image = bpy.data.images.load(path)
-    width, height = image.size
-    pixels = np.empty(width * height * 4, dtype=np.float32)
-    image.pixels.foreach_get(pixels)
-    bpy.data.images.remove(image)
-    return pixels.reshape(height, width, 4)[..., :3]
-
-
 def _render(path):
     scene = bpy.context.scene
-    scene.render.filepath = path
     scene.render.image_settings.file_format = "PNG"
-    bpy.ops.render.render(write_still=True)
-    return _load_rgb(path)
+    return h.render_pixels(scene, path)[..., :3]
 
 
 def _blocks(rgb):
@@ -137,25 +122,15 @@ def _shoot():
     path = os.path.join(state["out"], "viewport-full.png")
     with bpy.context.temp_override(window=window, area=area, region=region):
         bpy.ops.screen.screenshot_area(filepath=path)
-    full = _load_rgb(path)
+    full = h.load_pixels(path)[..., :3]
     x0, y0, x1, y1 = state["frame"]
     # screenshot_area captures the area; the region sits at its offset inside it.
     ox, oy = region.x - area.x, region.y - area.y
     return full[y0 + oy:y1 + oy, x0 + ox:x1 + ox]
 
 
-def tick():
-    try:
-        return _tick()
-    except Exception:
-        traceback.print_exc()
-        _finish(False, "exception")
-
-
 def _tick():
     from ndfbake import bake
-    if time.time() > state["deadline"]:
-        _finish(False, "timed out in step %s" % state["step"])
     step = state["step"]
     if step == "start":
         state["dir"] = h.temp_dir()
@@ -208,13 +183,4 @@ def _tick():
     return 1.0
 
 
-def main():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    state["out"] = os.path.abspath(argv[2]) if len(argv) > 2 else h.temp_dir("ndfb-viewport-")
-    os.makedirs(state["out"], exist_ok=True)
-    h.import_addon()
-    bpy.context.preferences.view.show_splash = False
-    bpy.app.timers.register(tick, first_interval=1.0)
-
-
-main()
+h.run_window_test("test_addon_viewport", state, _tick)

@@ -25,7 +25,6 @@ import hashlib
 import os
 import sys
 import time
-import traceback
 
 import bpy
 
@@ -54,10 +53,7 @@ def _install_gate():
 
 
 def _finish(ok, message):
-    if "dir" in state:
-        h.cleanup(state["dir"])
-    print(("PASS " if ok else "FAIL ") + "test_addon_window: " + message, flush=True)
-    os._exit(0 if ok else 1)
+    h.finish_window_test("test_addon_window", state, ok, message)
 
 
 def _properties_area():
@@ -86,19 +82,9 @@ def _invoke_bake():
         return bpy.ops.ndfbake.bake("INVOKE_DEFAULT")
 
 
-def tick():
-    try:
-        return _tick()
-    except Exception:
-        traceback.print_exc()
-        _finish(False, "exception")
-
-
 def _tick():
     from ndfbake import bake, operators
     state["ticks"] += 1
-    if time.time() > state["deadline"]:
-        _finish(False, "timed out in step %s" % state["step"])
     step = state["step"]
     if step == "start":
         directory = state["dir"] = h.temp_dir()
@@ -259,14 +245,5 @@ def _tick():
     return 0.05
 
 
-def main():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    state["out"] = os.path.abspath(argv[2]) if len(argv) > 2 else h.temp_dir("ndfb-window-")
-    os.makedirs(state["out"], exist_ok=True)
-    h.import_addon()
-    bpy.context.preferences.view.show_splash = False
-    _install_gate()
-    bpy.app.timers.register(tick, first_interval=1.0)
-
-
-main()
+h.run_window_test("test_addon_window", state, _tick)
+_install_gate()

@@ -12,7 +12,6 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 4. O' must reproduce O: per texel angle, away from island borders (where a texel centre can fall
    outside every triangle) under 1 degree. Also checks that ndfb_tangent_to_object(T) == O.
 """
-import math
 import os
 import sys
 
