@@ -21,7 +21,7 @@ import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ndfb_mesh import Library, MeshArrays  # noqa: E402
+from ndfb_mesh import library_from_argv, MeshArrays  # noqa: E402
 
 REPEATS = 5
 
@@ -54,12 +54,8 @@ def best_time(fn):
 
 
 def main():
-    args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    if not args:
-        print("usage: blender -b --python bench_tangents.py -- /path/to/libndfbake.so [subdivision levels]")
-        sys.exit(2)
-    lib = Library(args[0])
-    levels = int(args[1]) if len(args) > 1 else 5
+    lib, args = library_from_argv("[subdivision levels]")
+    levels = int(args[0]) if args else 5
     me = build_mesh(levels)
     me.calc_normals_split()
     arrays = MeshArrays.from_blender(me)

@@ -164,6 +164,17 @@ class MeshArrays:
         return MeshArrays(co, totals, verts[order], normals.reshape(-1, 3)[order], uvs.reshape(-1, 2)[order], order)
 
 
+def library_from_argv(usage_arguments=""):
+    """(Library of the path after `--`, the further arguments); prints the usage and exits 2
+    without one."""
+    args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    if not args:
+        script = os.path.basename(sys.argv[sys.argv.index("--python") + 1]) if "--python" in sys.argv else "SCRIPT"
+        print("usage: blender -b --python %s -- /path/to/libndfbake.so %s" % (script, usage_arguments))
+        sys.exit(2)
+    return Library(args[0]), args[1:]
+
+
 def blender_tangents(me, uv_layer=""):
     """Mesh.calc_tangents() per loop: (tangent xyz, bitangent sign)."""
     me.calc_tangents(uvmap=uv_layer or me.uv_layers.active.name)

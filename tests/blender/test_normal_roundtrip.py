@@ -19,7 +19,7 @@ import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ndfb_mesh import Library, MeshArrays  # noqa: E402
+from ndfb_mesh import library_from_argv, MeshArrays  # noqa: E402
 from test_tangents import mirrored_suzanne  # noqa: E402
 
 SIZE = 128
@@ -113,11 +113,7 @@ def angles_degrees(a, b):
 
 
 def main():
-    args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    if not args:
-        print("usage: blender -b --python test_normal_roundtrip.py -- /path/to/libndfbake.so")
-        sys.exit(2)
-    lib = Library(args[0])
+    lib, _ = library_from_argv()
     me = mirrored_suzanne(True)
     obj = bpy.context.object
     scene = bpy.context.scene

@@ -20,7 +20,7 @@ import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ndfb_mesh import Library, MeshArrays, blender_tangents  # noqa: E402
+from ndfb_mesh import library_from_argv, MeshArrays, blender_tangents  # noqa: E402
 
 ANGLE_TOLERANCE = 1e-3
 FLT_MIN = np.float32(1.17549435e-38)
@@ -372,11 +372,7 @@ def check_mirror(lib, arrays, ours, mirror_uv, totals):
 
 
 def main():
-    args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    if not args:
-        print("usage: blender -b --python test_tangents.py -- /path/to/libndfbake.so")
-        sys.exit(2)
-    lib = Library(args[0])
+    lib, _ = library_from_argv()
     totals = Totals()
 
     print("Blender primitives:")
