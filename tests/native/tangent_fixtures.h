@@ -1,11 +1,14 @@
 // Small meshes for the tangent tests, built face by face, and helpers to run the generator on them.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include "ndfbake.h"
 
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "math/vec3.h"
@@ -13,6 +16,18 @@
 #include "tangent/tangent_space.h"
 
 namespace ndfbake::tangent_testing {
+
+inline constexpr Vec3 kUp{0.0f, 0.0f, 1.0f};
+
+// A C API context for the tangent API tests (they write no files).
+class ContextTest : public ::testing::Test {
+protected:
+    void SetUp() override { ASSERT_EQ(ndfb_context_create(&ctx_), NDFB_OK); }
+    void TearDown() override { ndfb_context_destroy(ctx_); }
+    std::string error() const { return ndfb_last_error(ctx_); }
+
+    ndfb_context ctx_ = nullptr;
+};
 
 struct TestMesh {
     std::vector<float> positions;  // per vertex

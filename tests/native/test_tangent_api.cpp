@@ -19,15 +19,11 @@ namespace ndfbake {
 namespace {
 
 using tangent_testing::bumpy_grid;
+using tangent_testing::kUp;
 using tangent_testing::TestMesh;
 
-constexpr Vec3 kUp{0.0f, 0.0f, 1.0f};
-
-class TangentApi : public ::testing::Test {
+class TangentApi : public tangent_testing::ContextTest {
 protected:
-    void SetUp() override { ASSERT_EQ(ndfb_context_create(&ctx_), NDFB_OK); }
-    void TearDown() override { ndfb_context_destroy(ctx_); }
-
     static ndfb_mesh view(const TestMesh& m) { return mesh_view(m); }
     ndfb_status tangents(const TestMesh& m, std::vector<float>& out)
     {
@@ -35,9 +31,6 @@ protected:
         out.assign(m.corner_count() * 4, 0.0f);
         return ndfb_tangents(ctx_, &v, 0, out.data(), out.size(), nullptr, 0);
     }
-    std::string error() const { return ndfb_last_error(ctx_); }
-
-    ndfb_context ctx_ = nullptr;
 };
 
 TestMesh unit_square()

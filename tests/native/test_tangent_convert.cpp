@@ -16,15 +16,11 @@ namespace ndfbake {
 namespace {
 
 using tangent_testing::bumpy_grid;
+using tangent_testing::kUp;
 using tangent_testing::TestMesh;
 
-constexpr Vec3 kUp{0.0f, 0.0f, 1.0f};
-
-class TangentConvert : public ::testing::Test {
+class TangentConvert : public tangent_testing::ContextTest {
 protected:
-    void SetUp() override { ASSERT_EQ(ndfb_context_create(&ctx_), NDFB_OK); }
-    void TearDown() override { ndfb_context_destroy(ctx_); }
-
     // Converts `in` (w*h*3) with the given tangents (empty: computed) and padding.
     std::vector<float> convert(const TestMesh& m, const std::vector<float>& in, int w, int h, bool to_tangent,
                                uint32_t padding, std::vector<uint8_t>* coverage = nullptr,
@@ -43,7 +39,6 @@ protected:
         if (coverage) *coverage = cov;
         return out;
     }
-    ndfb_context ctx_ = nullptr;
 };
 
 Vec3 texel(const std::vector<float>& img, int w, int x, int y)

@@ -21,7 +21,7 @@ using tangent_testing::Frames;
 using tangent_testing::frames_of;
 using tangent_testing::TestMesh;
 
-constexpr Vec3 kUp{0.0f, 0.0f, 1.0f};
+using tangent_testing::kUp;
 
 Vec3 project(const Vec3& n, const Vec3& v) { return normalize_or(v - n * dot(n, v), {0, 0, 0}); }
 
