@@ -108,30 +108,13 @@ def settings_from_material(material):
 PENDING_SUFFIX = ".pending"
 
 
-@dataclass
-class LodPlan:
-    """The scene's level of detail for one material (scene_lod.py): levels to bake, and the
-    footprint constants of the node group."""
-    levels: int
-    texels_per_unit: float
-    pixel_angle: float
-    pixel_size: float
-    footprint_max: float
-
-
 def _plan_lod(material, scan, settings):
-    """A LodPlan from the scene's active camera, or None: level 0 filtered by the renderer (that
-    setting, no camera, or no rendered object with UV area uses the material)."""
-    scene = bpy.context.scene
-    if settings.level_of_detail != "SCENE" or scene.camera is None or scene.camera.type != "CAMERA":
+    """The scene's level of detail for the material (scene_lod.plan), or None: level 0 filtered
+    by the renderer."""
+    if settings.level_of_detail != "SCENE":
         return None
     uv_map = material.node_tree.nodes[scan.targets[0].normal_map].uv_map
-    needs = scene_lod.material_lod(scene, material, tuple(scan.image.size), uv_map)
-    if needs.texels_per_unit <= 0.0:
-        return None
-    camera = scene_lod.camera_footprint(scene, scene.camera)
-    return LodPlan(levels=needs.levels, texels_per_unit=needs.texels_per_unit, pixel_angle=camera.pixel_angle,
-                   pixel_size=camera.pixel_size, footprint_max=needs.footprint_max)
+    return scene_lod.plan(bpy.context.scene, material, tuple(scan.image.size), uv_map)
 
 
 def prepare(material, settings=None, pending=False):
@@ -185,7 +168,7 @@ class BakeJob:
         self.roughness = roughness
         self.settings = settings
         self.targets = targets
-        self.lod = lod           # LodPlan, or None: level 0 filtered by the renderer
+        self.lod = lod           # scene_lod.LodPlan, or None: level 0 filtered by the renderer
         self.stage = ""
         self.fraction = 0.0
         self.seconds = 0.0
@@ -332,10 +315,10 @@ def _read_report(out_dir):
 
 def _lobe_textures(out_dir, atlas):
     """The textures the node group samples: atlas_lobeJ.exr, or level00_lobeJ.exr."""
-    name = "atlas_lobe%d.exr" if atlas else "level00_lobe%d.exr"
-    pattern = re.compile(name.replace(".", r"\.").replace("%d", r"(\d+)") + "$")
+    prefix = "atlas_lobe" if atlas else "level00_lobe"
+    pattern = re.compile(re.escape(prefix) + r"(\d+)\.exr$")
     indices = sorted(int(m.group(1)) for m in (pattern.match(n) for n in os.listdir(out_dir)) if m)
-    return [os.path.join(out_dir, name % j) for j in indices]
+    return [os.path.join(out_dir, "%s%d.exr" % (prefix, j)) for j in indices]
 
 
 def _relative(path):
@@ -415,9 +398,7 @@ def finish(job):
         layout = report.get("atlas") or {}
         if not layout.get("levels"):
             raise BakeError("NATIVE_ERROR", "report.json in %s has no atlas layout" % job.out_dir)
-        atlas = nodes.AtlasLod(width=layout["width"], height=layout["height"], levels=layout["levels"],
-                               texels_per_unit=job.lod.texels_per_unit, pixel_angle=job.lod.pixel_angle,
-                               pixel_size=job.lod.pixel_size)
+        atlas = nodes.AtlasLayout(width=layout["width"], height=layout["height"], levels=layout["levels"])
 
     old = material_scan.record(material)
     old_images = []
@@ -433,13 +414,13 @@ def finish(job):
             normal_map = tree.nodes[normal_map_name]
             texture = tree.nodes[texture_name]
             group = nodes.build_material_group("NDFB " + material.name, principled, normal_map, texture, images,
-                                               atlas)
+                                               atlas, job.lod)
             targets.append({"principled": principled_name, "group_node": "", "node_group": group.name,
                             "bypassed": []})
             node, bypassed = nodes.insert_group_node(tree, group, principled, normal_map, texture)
             targets[-1].update(group_node=node.name, bypassed=bypassed)
             if job.lod is not None and bpy.context.scene.camera is not None:
-                nodes.drive_lod_inputs(tree, node, bpy.context.scene, bpy.context.scene.camera)
+                nodes.drive_lod_inputs(node, bpy.context.scene, bpy.context.scene.camera)
     except Exception as e:
         # A bug, not bad input: put the material back as it was before any bake, drop this bake's
         # images and files, and say so (no half-built material is left behind).

@@ -4,7 +4,7 @@ with stock nodes only, in EEVEE and Cycles alike.
 Lobe textures hold R = α_j and GBA = α_j·r_j in tangent space, with |r_j| = R_j the resultant
 length whose κ_j = (3R − R³)/(1 − R²). The encoding is linear: averaging texels averages
 distributions. Two ways to get the texel a pixel needs:
-- level of detail from the scene (AtlasLod, the default): lobe j's MIP atlas
+- level of detail from the scene (AtlasLayout + scene_lod.LodPlan, the default): lobe j's MIP atlas
   (`atlas_lobej.exr`, every fitted level framed in one image) is sampled at the level the
   "NDFB Level of Detail" group computes from the view distance and angle (scene_lod.py), with
   bilinear filtering done in nodes from four Closest lookups ("NDFB Atlas Taps", "NDFB
@@ -42,6 +42,8 @@ Script variant is offered; `osl_status()` says so. The stock-node group works in
 from dataclasses import dataclass
 
 import bpy
+
+from . import scene_lod
 
 GROUP_VERSION = 1
 TAG = "ndfbake"                       # ID/custom property marking what this add-on created
@@ -205,7 +207,6 @@ def level_of_detail_group():
     tree = _find_group(LOD_GROUP)
     if tree is not None:
         return tree
-    from .scene_lod import MIN_FACING, STRETCH
     tree, gin, gout = _group_with_io(
         LOD_GROUP, [(FLOAT, name) for name in LOD_INPUTS + ("Max Level",)], [(FLOAT, "Level")])
     camera = tree.nodes.new("ShaderNodeCameraData")
@@ -216,8 +217,8 @@ def level_of_detail_group():
     facing = _math(tree, "ABSOLUTE", _vmath(tree, "DOT_PRODUCT", geometry.outputs["Incoming"],
                                             geometry.outputs["True Normal"], location=(-700, -300), output=1),
                    location=(-550, -300))
-    stretch = _math(tree, "POWER", _math(tree, "MAXIMUM", facing, MIN_FACING, location=(-400, -300)), STRETCH,
-                    location=(-250, -300))
+    stretch = _math(tree, "POWER", _math(tree, "MAXIMUM", facing, scene_lod.MIN_FACING, location=(-400, -300)),
+                    scene_lod.STRETCH, location=(-250, -300))
     world = _math(tree, "MULTIPLY_ADD", distance, gin.outputs["Pixel Angle"], gin.outputs["Pixel Size"],
                   location=(-550, 200))
     texels = _math(tree, "DIVIDE", _math(tree, "MULTIPLY", world, gin.outputs["Texels per Unit"],
@@ -342,15 +343,12 @@ def _value(socket):
 
 
 @dataclass
-class AtlasLod:
-    """A material baked with MIP atlases (native write option `atlas`) and a level of detail
-    from the scene (scene_lod.py): report.json's "atlas" and the footprint constants."""
+class AtlasLayout:
+    """Where the levels sit in a lobe's MIP atlas (native write option `atlas`): report.json's
+    "atlas"."""
     width: int
     height: int
     levels: list                 # per level {"x", "y", "width", "height"}
-    texels_per_unit: float
-    pixel_angle: float
-    pixel_size: float
 
 
 
@@ -438,11 +436,12 @@ def _sample_level0(tree, gin, image, image_texture, has_vector, j, y):
     return tex.outputs["Color"], tex.outputs["Alpha"]
 
 
-def build_material_group(name, principled, normal_map, image_texture, lobe_images, atlas=None):
+def build_material_group(name, principled, normal_map, image_texture, lobe_images, atlas=None, lod=None):
     """A group with the carried Principled inputs (+ Normal Strength, + Vector if the original
     texture's was linked, + the level-of-detail constants with an atlas) and one BSDF output,
     shading through len(lobe_images) lobes: level-0 textures that the renderer filters itself
-    (atlas None), or MIP atlases sampled at the level of detail the scene gives (AtlasLod)."""
+    (atlas None), or MIP atlases (AtlasLayout) sampled at the level of detail the scene gives
+    (lod: a scene_lod.LodPlan, required with an atlas)."""
     tree = _new_group(name)
     decode = lobe_group()
     carried = carried_inputs(principled)
@@ -460,7 +459,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         vector = _add_socket(tree, "INPUT", "NodeSocketVector", "Vector")
         vector.hide_value = True
     if atlas is not None:
-        for key, value in zip(LOD_INPUTS, (atlas.texels_per_unit, atlas.pixel_angle, atlas.pixel_size)):
+        for key, value in zip(LOD_INPUTS, (lod.texels_per_unit, lod.pixel_angle, lod.pixel_size)):
             _add_socket(tree, "INPUT", "NodeSocketFloat", key).default_value = value
     _add_socket(tree, "OUTPUT", "NodeSocketShader", "BSDF")
 
@@ -531,41 +530,26 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     return tree
 
 
-def drive_lod_inputs(material_tree, node, scene, camera_object):
+def drive_lod_inputs(node, scene, camera_object):
     """Drivers that keep the group node's Pixel Angle (perspective) or Pixel Size (orthographic)
     equal to scene_lod.camera_footprint's as the camera's lens, sensor or the render resolution
     change (a 50% preview, a focal-length animation). Simple expressions only: Blender evaluates
     them without Python, so they work in files whose scripts are not trusted. Panoramic cameras
     and the texel density (a property of the meshes) keep their baked values."""
-    cam = camera_object.data
-    if cam.type not in {"PERSP", "ORTHO"}:
+    formula = scene_lod.footprint_driver(camera_object)
+    if formula is None:
         return
-    if cam.sensor_fit == "AUTO":
-        sensor, pixels = "sensor_width", "max(resx * ax, resy * ay)"
-    elif cam.sensor_fit == "HORIZONTAL":
-        sensor, pixels = "sensor_width", "resx * ax"
-    else:
-        sensor, pixels = "sensor_height", "resy * ay"
-    pixels = "(%s * pct / 100)" % pixels
-    if cam.type == "PERSP":
-        socket, expression, camera_vars = "Pixel Angle", "size / max(lens, 0.001) / " + pixels, (
-            ("size", sensor), ("lens", "lens"))
-    else:
-        socket, expression, camera_vars = "Pixel Size", "size / " + pixels, (("size", "ortho_scale"),)
-    fcurve = node.inputs[socket].driver_add("default_value")
-    driver = fcurve.driver
+    socket, expression, variables = formula
+    driver = node.inputs[socket].driver_add("default_value").driver
     driver.type = "SCRIPTED"
     driver.expression = expression
-    scene_vars = (("resx", "render.resolution_x"), ("resy", "render.resolution_y"),
-                  ("ax", "render.pixel_aspect_x"), ("ay", "render.pixel_aspect_y"),
-                  ("pct", "render.resolution_percentage"))
-    for (name, path), (id_type, owner) in [(v, ("CAMERA", cam)) for v in camera_vars] + \
-                                          [(v, ("SCENE", scene)) for v in scene_vars]:
+    owners = {"CAMERA": camera_object.data, "SCENE": scene}
+    for name, id_type, path in variables:
         var = driver.variables.new()
         var.name = name
         var.type = "SINGLE_PROP"
         var.targets[0].id_type = id_type
-        var.targets[0].id = owner
+        var.targets[0].id = owners[id_type]
         var.targets[0].data_path = path
 
 

@@ -169,26 +169,24 @@ class NDFBAKE_OT_bake(_ModalBakes, bpy.types.Operator):
 
     material: StringProperty(name="Material", description="Material to bake; empty: the active material")
 
-    def execute(self, context):
+    def _target(self, context):
         material = _material(context, self.material)
         if material is None:
             self.report({"ERROR"}, "ndfbake: no material to bake" + (" named '%s'" % self.material
                                                                      if self.material else ""))
+        return material
+
+    def execute(self, context):
+        material = self._target(context)
+        if material is None:
             return {"CANCELLED"}
-        try:
-            result = bake.bake_material(material, bake.settings_from_material(material))
-        except bake.BakeError as e:
-            self.report({"ERROR"}, "ndfbake: " + e.message)
-            return {"CANCELLED"}
-        self.report({"INFO"}, "ndfbake: %s: %s" % (result.material, result.summary))
-        return {"FINISHED"}
+        return _report_outcomes(self, bake.bake_materials([material]))
 
     def invoke(self, context, event):
         if bpy.app.background or context.window is None:
             return self.execute(context)
-        material = _material(context, self.material)
+        material = self._target(context)
         if material is None:
-            self.report({"ERROR"}, "ndfbake: no material to bake")
             return {"CANCELLED"}
         return self.start_bakes(context, [material])
 

@@ -45,33 +45,71 @@ class CameraFootprint:
 
 
 @dataclass
+class LodPlan:
+    """A material's level of detail for a bake: the levels to fit, and the footprint constants
+    of its node group."""
+    levels: int
+    texels_per_unit: float
+    pixel_angle: float
+    pixel_size: float
+    footprint_max: float
+
+
+@dataclass
 class MaterialLod:
     texels_per_unit: float       # map texels per world unit on the material's surfaces
     levels: int                  # levels the scene's cameras reach (0: no camera sees it)
     footprint_max: float         # largest footprint in texels over the material's vertices
 
 
+def _sensor_fit(cam):
+    """(sensor property, the side it spans: "larger", "width" or "height"). AUTO spans the sensor
+    width (and the orthographic scale) over the larger side."""
+    if cam.sensor_fit == "AUTO":
+        return "sensor_width", "larger"
+    if cam.sensor_fit == "HORIZONTAL":
+        return "sensor_width", "width"
+    return "sensor_height", "height"
+
+
+# The pixels across the spanned side, as footprint_driver's expressions say it.
+_SIDE_EXPRESSIONS = {"larger": "max(resx * ax, resy * ay)", "width": "resx * ax", "height": "resy * ay"}
+
+
 def camera_footprint(scene, camera_object):
     """The pixel footprint of a camera at the scene's render resolution."""
     render = scene.render
     scale = render.resolution_percentage / 100.0
-    width = max(1.0, render.resolution_x * scale * render.pixel_aspect_x)
-    height = max(1.0, render.resolution_y * scale * render.pixel_aspect_y)
+    width = render.resolution_x * scale * render.pixel_aspect_x
+    height = render.resolution_y * scale * render.pixel_aspect_y
     cam = camera_object.data
-    # AUTO spans the sensor width (and the orthographic scale) over the larger side.
-    if cam.sensor_fit == "AUTO":
-        sensor, pixels = cam.sensor_width, max(width, height)
-    elif cam.sensor_fit == "HORIZONTAL":
-        sensor, pixels = cam.sensor_width, width
-    else:
-        sensor, pixels = cam.sensor_height, height
+    sensor, side = _sensor_fit(cam)
+    pixels = max(1.0, {"larger": max(width, height), "width": width, "height": height}[side])
     location = tuple(camera_object.matrix_world.translation)
     if cam.type == "ORTHO":
         return CameraFootprint(location, 0.0, cam.ortho_scale / pixels, cam.clip_end)
     if cam.type == "PANO":
         # No single focal length: the angle a pixel subtends over the camera's field of view.
         return CameraFootprint(location, 2.0 * math.pi / pixels, 0.0, cam.clip_end)
-    return CameraFootprint(location, sensor / max(cam.lens, 1e-3) / pixels, 0.0, cam.clip_end)
+    return CameraFootprint(location, getattr(cam, sensor) / max(cam.lens, 1e-3) / pixels, 0.0, cam.clip_end)
+
+
+def footprint_driver(camera_object):
+    """How a driver recomputes camera_footprint as the camera and the resolution change:
+    (the group input it drives, a simple expression, [(variable, "CAMERA" or "SCENE", property
+    path)]), or None for a panoramic camera."""
+    cam = camera_object.data
+    if cam.type not in {"PERSP", "ORTHO"}:
+        return None
+    sensor, side = _sensor_fit(cam)
+    pixels = "(%s * pct / 100)" % _SIDE_EXPRESSIONS[side]
+    scene_vars = [("resx", "SCENE", "render.resolution_x"), ("resy", "SCENE", "render.resolution_y"),
+                  ("ax", "SCENE", "render.pixel_aspect_x"), ("ay", "SCENE", "render.pixel_aspect_y"),
+                  ("pct", "SCENE", "render.resolution_percentage")]
+    if cam.type == "PERSP":
+        return ("Pixel Angle", "size / max(lens, 0.001) / " + pixels,
+                [("size", "CAMERA", sensor), ("lens", "CAMERA", "lens")] + scene_vars)
+    return "Pixel Size", "size / " + pixels, [("size", "CAMERA", "ortho_scale")] + scene_vars
 
 
 def scene_cameras(scene):
@@ -169,3 +207,16 @@ def material_lod(scene, material, image_size, uv_map=""):
     # Levels up to ceil(log2(largest)), plus the next one for the blend between two levels.
     needed = int(math.ceil(math.log2(max(largest, 1.0)))) + 2
     return MaterialLod(texels_per_unit, max(1, min(all_levels, needed)), largest)
+
+
+def plan(scene, material, image_size, uv_map=""):
+    """The LodPlan of `material` for its scene's active camera, or None where the scene gives no
+    level of detail (no camera, or no rendered object with UV area uses the material)."""
+    if scene.camera is None or scene.camera.type != "CAMERA":
+        return None
+    needs = material_lod(scene, material, image_size, uv_map)
+    if needs.texels_per_unit <= 0.0:
+        return None
+    camera = camera_footprint(scene, scene.camera)
+    return LodPlan(levels=needs.levels, texels_per_unit=needs.texels_per_unit, pixel_angle=camera.pixel_angle,
+                   pixel_size=camera.pixel_size, footprint_max=needs.footprint_max)

@@ -174,7 +174,7 @@ def test_atlas_lookups_equal_bilinear_filtering_of_the_level_files():
             layout = json.load(f)["atlas"]
         atlas_image = bpy.data.images.load(os.path.join(out, "atlas_lobe1.exr"))
         atlas_image.colorspace_settings.name = "Non-Color"
-        atlas = nodes.AtlasLod(layout["width"], layout["height"], layout["levels"], 1.0, 0.0, 0.0)
+        atlas = nodes.AtlasLayout(layout["width"], layout["height"], layout["levels"])
 
         # A plane seen from above by an orthographic camera; UVs 0..2.5 so the texture tiles.
         bpy.ops.mesh.primitive_plane_add(size=2.0)
