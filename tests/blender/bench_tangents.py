@@ -21,7 +21,7 @@ import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ndfb_mesh import library_from_argv, MeshArrays  # noqa: E402
+from ndfb_mesh import library_from_argv, MeshArrays, write_bmesh  # noqa: E402
 
 REPEATS = 5
 
@@ -35,12 +35,7 @@ def build_mesh(levels):
     me = bpy.data.meshes.new_from_object(obj.evaluated_get(depsgraph))
     bm = bmesh.new()
     bm.from_mesh(me)
-    bmesh.ops.triangulate(bm, faces=bm.faces[:])
-    bm.to_mesh(me)
-    bm.free()
-    for p in me.polygons:
-        p.use_smooth = True
-    return me
+    return write_bmesh(bm, me)
 
 
 def best_time(fn):

@@ -175,6 +175,19 @@ def library_from_argv(usage_arguments=""):
     return Library(args[0]), args[1:]
 
 
+def write_bmesh(bm, me, triangulate=True):
+    """Writes `bm` into `me` (triangulated first if asked), frees it and shades `me` smooth (so
+    corner normals vary and the frames are per corner)."""
+    import bmesh
+    if triangulate:
+        bmesh.ops.triangulate(bm, faces=bm.faces[:])
+    bm.to_mesh(me)
+    bm.free()
+    for p in me.polygons:
+        p.use_smooth = True
+    return me
+
+
 def blender_tangents(me, uv_layer=""):
     """Mesh.calc_tangents() per loop: (tangent xyz, bitangent sign)."""
     me.calc_tangents(uvmap=uv_layer or me.uv_layers.active.name)

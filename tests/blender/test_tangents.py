@@ -20,7 +20,7 @@ import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ndfb_mesh import library_from_argv, MeshArrays, blender_tangents  # noqa: E402
+from ndfb_mesh import library_from_argv, MeshArrays, blender_tangents, write_bmesh  # noqa: E402
 
 ANGLE_TOLERANCE = 1e-3
 FLT_MIN = np.float32(1.17549435e-38)
@@ -234,13 +234,7 @@ def island_grid(seed, triangulate, degenerate_positions):
             if rng.random() < 0.04 and v.link_edges:
                 other = v.link_edges[0].other_vert(v)
                 v.co = other.co.copy()
-    if triangulate:
-        bmesh.ops.triangulate(bm, faces=bm.faces[:])
-    bm.to_mesh(me)
-    bm.free()
-    for p in me.polygons:
-        p.use_smooth = True
-    return me
+    return write_bmesh(bm, me, triangulate)
 
 
 class Quiet:
