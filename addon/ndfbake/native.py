@@ -184,7 +184,6 @@ class Library:
             "ndfb_mesh_init": (None, [c.POINTER(Mesh)]),
             "ndfb_texel_density": (c.c_int, [vp, c.POINTER(Mesh), c.POINTER(c.c_float), c.c_size_t,
                                              c.POINTER(c.c_double)]),
-            "ndfb_describe_image": (c.c_int, [vp, c.c_char_p, c.c_char_p, c.c_size_t, c.POINTER(c.c_size_t)]),
         }
         for name, (restype, argtypes) in sig.items():
             try:
@@ -346,13 +345,6 @@ class Context:
         self.check(self.lib.lib.ndfb_synthesize(self.handle, pattern.encode(), width, height, seed,
                                                 ctypes.byref(handle)))
         return NormalMap(self, handle)
-
-    def describe_image(self, path):
-        length = ctypes.c_size_t()
-        self.check(self.lib.lib.ndfb_describe_image(self.handle, _encode(path), None, 0, ctypes.byref(length)))
-        buffer = ctypes.create_string_buffer(length.value + 1)
-        self.check(self.lib.lib.ndfb_describe_image(self.handle, _encode(path), buffer, len(buffer), None))
-        return buffer.value.decode(errors="replace")
 
 
 _lock = threading.Lock()
