@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace ndfbake {
@@ -29,11 +30,12 @@ float kappa_from_resultant(double r)
     return float(std::clamp(kappa, double(kKappaMin), double(kKappaMax)));
 }
 
-double resultant_from_kappa(float kappa)
+namespace {
+
+// Solves g(R) = R(3 − R²) − k(1 − R²) = 0 on (0, 1): g(0) = −k < 0 < 2 = g(1), and g is
+// increasing there, so bisection is safe; Newton from the bracket then converges quickly.
+double solve_resultant(double k)
 {
-    const double k = std::clamp(double(kappa), double(kKappaMin), double(kKappaMax));
-    // Solve g(R) = R(3 − R²) − k(1 − R²) = 0 on (0, 1): g(0) = −k < 0 < 2 = g(1), and g is
-    // increasing there, so bisection is safe; Newton from the bracket then converges quickly.
     double lo = 0.0, hi = 1.0;
     double r = std::clamp(mean_resultant_length(k), 1e-12, 1.0 - 1e-12);
     for (int i = 0; i < 100; ++i) {
@@ -42,10 +44,22 @@ double resultant_from_kappa(float kappa)
         const double dg = 3.0 - 3.0 * r * r + 2.0 * k * r;
         double next = r - g / dg;
         if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-        if (std::abs(next - r) <= 1e-16) { r = next; break; }
+        // Converged to rounding: a fixed absolute 1e-16 is below double's spacing near 1 and
+        // would run every iteration.
+        if (std::abs(next - r) <= 4.0 * std::numeric_limits<double>::epsilon() * next) return next;
         r = next;
     }
     return r;
+}
+
+}  // namespace
+
+double resultant_from_kappa(float kappa)
+{
+    // Every level-0 texel is a lobe of κ = kKappaMax: solve for it once.
+    static const double at_kappa_max = solve_resultant(kKappaMax);
+    if (kappa >= kKappaMax) return at_kappa_max;
+    return solve_resultant(std::max(double(kappa), double(kKappaMin)));
 }
 
 double log_vmf_normalizer_shifted(double kappa)
@@ -56,7 +70,9 @@ double log_vmf_normalizer_shifted(double kappa)
         // log(κ / sinh κ) = −κ²/6 + O(κ⁴)
         return -log_4pi - kappa * kappa / 6.0 + kappa;
     }
-    // log C + κ = log κ − log 2π − log(1 − e^{−2κ})
+    // log C + κ = log κ − log 2π − log(1 − e^{−2κ}); past κ = 20 the last term is under 5e-18,
+    // below double's rounding of the rest, and EM asks for this of every lobe every iteration.
+    if (kappa > 20.0) return std::log(kappa) - log_2pi;
     return std::log(kappa) - log_2pi - std::log1p(-std::exp(-2.0 * kappa));
 }
 

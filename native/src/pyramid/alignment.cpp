@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <vector>
 
 namespace ndfbake {
@@ -20,22 +21,35 @@ float slot_score(const VmfLobe& lobe, int slot, std::span<const VmfLobe> parent,
     return score;
 }
 
-// The E-step's argmax: the lobe most responsible for n under a mixture.
-int most_responsible_slot(std::span<const VmfLobe> mixture, const Vec3& n)
-{
-    int best_slot = 0;
-    float best = -std::numeric_limits<float>::infinity();
-    for (size_t s = 0; s < mixture.size(); ++s) {
-        if (!(mixture[s].alpha > 0.0f)) continue;
-        const float log_p = std::log(mixture[s].alpha) +
-                            log_vmf_density(mixture[s], n, float(log_vmf_normalizer_shifted(mixture[s].kappa)));
-        if (log_p > best) {
-            best = log_p;
-            best_slot = int(s);
-        }
+// The E-step's argmax over one mixture for many normals: log α_s + log C(κ_s) per slot computed
+// once (level 0 asks it of every fine normal).
+class MostResponsibleSlot {
+public:
+    explicit MostResponsibleSlot(std::span<const VmfLobe> mixture) : mixture_(mixture.begin(), mixture.end())
+    {
+        for (const VmfLobe& lobe : mixture_)
+            log_weight_.push_back(lobe.alpha > 0.0f ? std::log(lobe.alpha) + float(log_vmf_normalizer_shifted(lobe.kappa))
+                                                    : -std::numeric_limits<float>::infinity());
     }
-    return best_slot;
-}
+    int operator()(const Vec3& n) const
+    {
+        int best_slot = 0;
+        float best = -std::numeric_limits<float>::infinity();
+        for (size_t s = 0; s < mixture_.size(); ++s) {
+            if (!(mixture_[s].alpha > 0.0f)) continue;
+            const float log_p = log_vmf_density(mixture_[s], n, log_weight_[s]);
+            if (log_p > best) {
+                best = log_p;
+                best_slot = int(s);
+            }
+        }
+        return best_slot;
+    }
+
+private:
+    std::vector<VmfLobe> mixture_;
+    std::vector<float> log_weight_;
+};
 
 }  // namespace
 
@@ -88,6 +102,21 @@ void align_lobe_slots(LobePyramid& pyramid, const PyramidSettings& settings, con
             std::vector<VmfLobe> parent(static_cast<size_t>(slots)), left(static_cast<size_t>(slots)), current(static_cast<size_t>(slots));
             std::vector<VmfLobe> ancestor(static_cast<size_t>(slots));
             std::vector<WeightedNormal> samples;
+            if (l == 0) {
+                // Each level-0 texel joins the slot of the top level's most responsible lobe.
+                std::optional<MostResponsibleSlot> slot_of_normal;
+                int ancestor_x = -1;
+                for (int x = 0; x < width; ++x) {
+                    if (x >> top != ancestor_x) {
+                        ancestor_x = x >> top;
+                        pyramid.texel(top, ancestor_x, y >> top, ancestor);
+                        slot_of_normal.emplace(ancestor);
+                    }
+                    const size_t t = size_t(y) * size_t(width) + size_t(x);
+                    level.level0_slot[t] = uint8_t((*slot_of_normal)(pyramid.source.normals[t]));
+                }
+                return;
+            }
             for (int x = 0; x < width; ++x) {
                 pyramid.texel(l + 1, x / 2, y / 2, parent);
                 std::span<const VmfLobe> left_span;
@@ -96,11 +125,6 @@ void align_lobe_slots(LobePyramid& pyramid, const PyramidSettings& settings, con
                     left_span = left;
                 }
                 const size_t t = size_t(y) * size_t(width) + size_t(x);
-                if (l == 0) {
-                    pyramid.texel(top, x >> top, y >> top, ancestor);
-                    level.level0_slot[t] = uint8_t(most_responsible_slot(ancestor, pyramid.source.normals[t]));
-                    continue;
-                }
                 std::vector<VmfLobe> lobes = pyramid.texel_lobes(l, x, y);
                 std::vector<int> slot_of(lobes.size());
                 assign_slots(lobes, parent, left_span, slot_of);
