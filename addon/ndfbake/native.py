@@ -76,6 +76,7 @@ class FitOptions(ctypes.Structure):
         ("progress_user", ctypes.c_void_p),
         ("max_memory_bytes", ctypes.c_uint64),
         ("max_levels", ctypes.c_uint32),
+        ("starts", ctypes.c_uint32),
     ]
 
 

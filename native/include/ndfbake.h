@@ -57,8 +57,10 @@ typedef enum ndfb_srgb_policy {
     NDFB_SRGB_LINEARIZE = 1  /* decode the sRGB curve first (a map saved through a colour pipeline) */
 } ndfb_srgb_policy;
 typedef enum ndfb_fit_method {
-    NDFB_FIT_PER_LEVEL = 0,    /* every level from all the fine normals it covers (Han §7.1) */
-    NDFB_FIT_HIERARCHICAL = 1  /* every level from the level below's lobes: faster, less accurate */
+    NDFB_FIT_PER_LEVEL = 0,    /* every level from all the fine normals it covers (Han §7.1): the
+                                  reference the default is measured against */
+    NDFB_FIT_HIERARCHICAL = 1  /* every level from the binned normals of the level below (default):
+                                  as accurate, several times faster */
 } ndfb_fit_method;
 typedef enum ndfb_representation {
     NDFB_REPR_VMF_MIXTURE = 0, /* the budgeted vMF mixture (what bake writes) */
@@ -92,8 +94,8 @@ typedef struct ndfb_fit_options {
     ndfb_wrap wrap;
     int32_t align;                /* non-zero: aligned lobes (eq. 23) for hardware filtering, default 1 */
     float alignment_strength;     /* C of eq. 23, default 0.25 */
-    uint32_t max_iterations;      /* EM iterations per texel, default 20 */
-    ndfb_fit_method method;       /* default NDFB_FIT_PER_LEVEL */
+    uint32_t max_iterations;      /* EM iterations per texel at most, default 10 */
+    ndfb_fit_method method;       /* default NDFB_FIT_HIERARCHICAL */
     uint32_t threads;             /* 0: all cores */
     ndfb_progress_fn progress;
     void* progress_user;
@@ -107,6 +109,10 @@ typedef struct ndfb_fit_options {
        to 1x1. A scene whose cameras never see the map smaller than 2^(n-1) texels per pixel needs
        n levels, and the fit of each level costs about as much as any other. */
     uint32_t max_levels;
+    /* EM starts per texel: 1 seeds EM from the finer level's lobes only (Han §7.1); 2 (default)
+       also from the farthest-apart samples where a texel has more than 64, keeping the likelier
+       fit (lower error on wide footprints, where the finer level's lobes trap EM). */
+    uint32_t starts;
 } ndfb_fit_options;
 
 typedef struct ndfb_write_options {

@@ -41,16 +41,19 @@ bake options:
   --levels N           fit and write levels 0..N-1 only (default 0: every level down to 1x1)
   --atlas              also write atlas_lobeJ.exr: every level of lobe slot J in one image
                        (for renderers without MIP levels; layout in report.json)
-  --method M           per-level (default: every level from its fine normals) or hierarchical
-                       (every level from the level below's lobes: faster, less accurate)
-  --iterations N       EM iterations per texel at most (default 20)
+  --method M           hierarchical (default: every level from the binned normals of the level
+                       below) or per-level (every level from all its fine normals: Han's
+                       reference, several times slower)
+  --iterations N       EM iterations per texel at most (default 10)
+  --starts N           2 (default): EM from the finer level's lobes and from the farthest
+                       samples, keeping the likelier; 1: from the finer level's lobes (Han 7.1)
   --no-align           fit texels independently (no lobe alignment across texels and levels)
   --threads N          worker threads (default: all cores)
   --quiet              no progress output
 
 bench options:
   --size N             side of the synthetic patterns (default 256; 0 leaves them out)
-  --methods LIST       comma-separated: bake-default, vmf-1 … vmf-8, vmf-4-hierarchical, naive,
+  --methods LIST       comma-separated: bake-default, vmf-1 … vmf-8, vmf-4-per-level, naive,
                        toksvig, single-vmf, lean, xu-1x1, xu-1x4, xu-2x4, xu-adaptive, sh-2 … sh-8
                        (default: all)
   --brdfs LIST         comma-separated BRDF specs as for bake (default ggx:0.3,ggx:0.6)
@@ -206,6 +209,7 @@ int run_bake(ndfb_context ctx, const Args& args)
             fit.method = value == "per-level" ? NDFB_FIT_PER_LEVEL : NDFB_FIT_HIERARCHICAL;
         else if (name == "--iterations" && numeric && number >= 1 && number == double(int(number)))
             fit.max_iterations = uint32_t(number);
+        else if (name == "--starts" && (value == "1" || value == "2")) fit.starts = uint32_t(number);
         else if (name == "--no-align") fit.align = 0;
         else if (name == "--quiet") progress.quiet = true;
         else if (name == "--atlas") write.atlas = 1;

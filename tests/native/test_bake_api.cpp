@@ -89,6 +89,21 @@ TEST_F(BakeApi, MaxLevelsFitsAndWritesOnlyTheLevelsAsked)
     EXPECT_NE(std::string(ndfb_last_error(ctx_)).find("max_levels"), std::string::npos);
 }
 
+TEST_F(BakeApi, StartsAreOneOrTwoAndTheDefaultIsTheHierarchicalFitWithTwo)
+{
+    EXPECT_EQ(fit_.method, NDFB_FIT_HIERARCHICAL);
+    EXPECT_EQ(fit_.starts, 2u);
+    const std::string input = synth_file(Pattern::fbm, 16, 16, "fbm.png");
+    fit_.starts = 3;
+    EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("bad").c_str(), &decode_, &fit_, &write_), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(ndfb_last_error(ctx_)).find("starts"), std::string::npos);
+    EXPECT_FALSE(std::filesystem::exists(path("bad")));
+    fit_.starts = 1;
+    fit_.method = NDFB_FIT_PER_LEVEL;
+    EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("reference").c_str(), &decode_, &fit_, &write_), NDFB_OK)
+        << ndfb_last_error(ctx_);
+}
+
 TEST_F(BakeApi, TheReportNamesTheSlotsNoTexelUsesAndTheirTexturesAreZero)
 {
     const std::string input = synth_file(Pattern::bumps, 32, 32, "bumps.png");

@@ -9,6 +9,7 @@
 #include "bake/lobe_atlas.h"
 #include "error.h"
 #include "ndf/weighted_normal.h"
+#include "pyramid/normal_bins.h"
 #include "pyramid/parallel.h"
 
 namespace ndfbake {
@@ -42,11 +43,12 @@ MemoryEstimate estimate_bake_memory(int width, int height, const SourceLayout& s
     uint64_t pyramid = normals + pixels;
     // The largest working set of the fit: at level l each busy worker gathers one texel's
     // footprint (min(2^l, w) x min(2^l, h) fine normals) and EM copies it into four float arrays;
-    // a budgeted fit copies it once more to subsample it.
-    const bool gathers = settings.method != FitMethod::hierarchical || settings.fit.tolerance > 0.0f;
+    // a budgeted fit copies it once more to subsample it. The hierarchical fit gathers wherever a
+    // texel's children do not cover it (any level of a 1 x N map), and holds two levels' bins.
     const uint64_t per_sample =
         sizeof(WeightedNormal) + 4 * sizeof(float) + (settings.fit.tolerance > 0.0f ? sizeof(WeightedNormal) : 0);
-    uint64_t working = 0;
+    const bool hierarchical = settings.method == FitMethod::hierarchical;
+    uint64_t working = 0, finer_bins = 0;
     const int levels = pyramid_level_count(width, height, settings);
     for (int l = 0; l < levels; ++l) {
         const LevelSize size = level_size(width, height, l);
@@ -57,8 +59,14 @@ MemoryEstimate estimate_bake_memory(int width, int height, const SourceLayout& s
         const uint64_t span = uint64_t(1) << l;
         const uint64_t footprint = std::min<uint64_t>(span, uint64_t(width)) * std::min<uint64_t>(span, uint64_t(height));
         const uint64_t busy = std::min<uint64_t>(threads, uint64_t(size.height));
-        // Level statistics for the report gather the same footprints, one at a time.
-        working = std::max(working, footprint * std::max<uint64_t>(gathers ? busy * per_sample : 0, sizeof(WeightedNormal)));
+        const uint64_t bins = hierarchical && keeps_bins(l)
+            ? texels * (std::min<uint64_t>(footprint, kNormalBinCount) * sizeof(NormalBin) + sizeof(uint32_t))
+            : 0;
+        working = std::max(working, finer_bins + bins + footprint * busy * per_sample);
+        finer_bins = bins;
+        // Level statistics for the report gather the same footprints (twice when they also
+        // refit), one level per thread: at worst the top level's on every thread.
+        working = std::max(working, std::min<uint64_t>(threads, uint64_t(levels)) * footprint * 2 * sizeof(WeightedNormal));
     }
 
     if (source.channels > 0) {
@@ -69,18 +77,20 @@ MemoryEstimate estimate_bake_memory(int width, int height, const SourceLayout& s
         e.decode = file_samples + our_samples + normals;
     }
     e.fit = normals + pyramid + working;
-    // One level-0 lobe texture in float and converted for the file (at most float again).
-    uint64_t writing = pixels * 4 * sizeof(float) * 2;
+    // Files are written on every thread at once (bake.cpp), each holding one texture in float
+    // and as converted for the file (at most float again): level 0 is the largest.
+    const uint64_t writers = std::min<uint64_t>(threads, slots * uint64_t(levels) + (write.atlas ? slots : 0));
+    uint64_t writing = writers * pixels * 4 * sizeof(float) * 2;
     // Colour: every slot's level-0 texture at once, the colour image twice and its decoded pixels.
     if (!write.color_path.empty())
         writing += slots * pixels * 4 * sizeof(float) + 2 * normals + pixels * 4 * sizeof(float);
     if (write.atlas) {
-        // One lobe's atlas at a time, in float and converted for the file, beside one level.
+        // Each writer: one lobe's atlas in float and converted for the file, beside one level.
         std::vector<LevelSize> sizes;
         for (int l = 0; l < levels; ++l) sizes.push_back(level_size(width, height, l));
         const AtlasLayout atlas = atlas_layout(sizes);
-        writing = std::max(writing, uint64_t(atlas.width) * uint64_t(atlas.height) * 4 * sizeof(float) * 2 +
-                                        pixels * 4 * sizeof(float));
+        writing = std::max(writing, writers * (uint64_t(atlas.width) * uint64_t(atlas.height) * 4 * sizeof(float) * 2 +
+                                               pixels * 4 * sizeof(float)));
     }
     e.write = normals + pyramid + writing;
     return e;

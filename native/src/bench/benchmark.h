@@ -30,7 +30,7 @@ struct BenchRow {
 };
 
 // "bake-default" (what `ndfbake bake` runs), "vmf-1" … "vmf-8" (fixed lobe counts),
-// "vmf-4-hierarchical", and every baseline of baselines/registry.h.
+// "vmf-4-per-level", and every baseline of baselines/registry.h.
 std::vector<std::string> bench_method_names();
 
 // Runs the benchmark and writes into out_dir: bench.csv (one row per map, method, BRDF and level),

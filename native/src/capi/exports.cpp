@@ -125,6 +125,10 @@ PyramidSettings to_pyramid(const ndfb_fit_options* o)
         require(o->max_levels <= 64, "max_levels must be at most 64 (0: every level), got " + std::to_string(o->max_levels));
         s.max_levels = int(o->max_levels);
     }
+    if (o->struct_size >= offsetof(ndfb_fit_options, starts) + sizeof(o->starts)) {
+        require(o->starts == 1 || o->starts == 2, "starts must be 1 or 2, got " + std::to_string(o->starts));
+        s.fit.two_starts = o->starts == 2;
+    }
     return s;
 }
 
@@ -245,8 +249,9 @@ NDFB_API void ndfb_fit_options_init(ndfb_fit_options* o)
     o->align = d.align ? 1 : 0;
     o->alignment_strength = d.alignment_strength;
     o->max_iterations = uint32_t(d.fit.em.max_iterations);
-    o->method = NDFB_FIT_PER_LEVEL;
+    o->method = d.method == FitMethod::hierarchical ? NDFB_FIT_HIERARCHICAL : NDFB_FIT_PER_LEVEL;
     o->threads = 0;
+    o->starts = d.fit.two_starts ? 2 : 1;
 }
 
 NDFB_API void ndfb_write_options_init(ndfb_write_options* o)

@@ -1,8 +1,11 @@
 #include "ndf/spherical_em.h"
 
+#include "error.h"
 #include "math/fast_exp.h"
 
 #include <algorithm>
+#include <array>
+#include <memory>
 #include <cmath>
 #include <limits>
 
@@ -18,21 +21,21 @@ struct LobeTerms {
     float log_norm_shifted;
 };
 
-std::vector<LobeTerms> lobe_terms(std::span<const VmfLobe> lobes)
+// Per lobe, on the stack: EM recomputes them every iteration, for texels of a dozen samples too.
+using LobeTermArray = std::array<LobeTerms, kMaxLobes>;
+
+void lobe_terms(std::span<const VmfLobe> lobes, LobeTermArray& terms)
 {
-    std::vector<LobeTerms> terms(lobes.size());
     for (size_t j = 0; j < lobes.size(); ++j) {
         terms[j].log_alpha = lobes[j].alpha > 0.0f ? std::log(lobes[j].alpha)
                                                    : -std::numeric_limits<float>::infinity();
         terms[j].log_norm_shifted = float(log_vmf_normalizer_shifted(lobes[j].kappa));
     }
-    return terms;
 }
 
-// Returns log Σ_j α_j γ_j(n) and fills z[j] ∝ (α_j γ_j(n))^sharpness, normalized: the E-step's
+// Returns log Σ_j α_j γ_j(n) and fills z[j] ∝ α_j γ_j(n), normalized: the E-step's
 // responsibilities, from one exponential per lobe (shifted by the largest term: log-sum-exp).
-float responsibilities(std::span<const VmfLobe> lobes, std::span<const LobeTerms> terms, const Vec3& n, float* z,
-                       float sharpness = 1.0f)
+float responsibilities(std::span<const VmfLobe> lobes, std::span<const LobeTerms> terms, const Vec3& n, float* z)
 {
     float max_log = -std::numeric_limits<float>::infinity();
     for (size_t j = 0; j < lobes.size(); ++j) {
@@ -43,52 +46,51 @@ float responsibilities(std::span<const VmfLobe> lobes, std::span<const LobeTerms
         std::fill(z, z + lobes.size(), 0.0f);
         return max_log;
     }
-    float sum = 0.0f, sharp_sum = 0.0f;
+    float sum = 0.0f;
     for (size_t j = 0; j < lobes.size(); ++j) {
-        const float shifted = z[j] - max_log;
-        sum += std::exp(shifted);
-        z[j] = sharpness == 1.0f ? std::exp(shifted) : std::exp(sharpness * shifted);
-        sharp_sum += z[j];
+        z[j] = std::exp(z[j] - max_log);
+        sum += z[j];
     }
-    const float inv_sum = 1.0f / sharp_sum;
+    const float inv_sum = 1.0f / sum;
     for (size_t j = 0; j < lobes.size(); ++j) z[j] *= inv_sum;
     return max_log + std::log(sum);
 }
 
 // Samples in structure-of-arrays form, so that the E-step runs over many samples per lobe at once.
 struct SampleBlocks {
-    std::vector<float> x, y, z, w;
+    // One allocation of exactly four arrays: a top-level footprint is the whole map, and growth by
+    // doubling would hold up to twice its memory (bake/memory_budget.cpp counts 16 bytes a sample).
+    std::unique_ptr<float[]> storage;
+    const float *x, *y, *z, *w;
+    size_t count;
     explicit SampleBlocks(std::span<const WeightedNormal> samples)
+        : storage(new float[4 * samples.size()]), count(samples.size())
     {
-        // Exact sizes: a top-level footprint is the whole map, and growth by doubling would hold
-        // up to twice its memory (bake/memory_budget.cpp counts 16 bytes per sample).
-        x.reserve(samples.size());
-        y.reserve(samples.size());
-        z.reserve(samples.size());
-        w.reserve(samples.size());
-        for (const WeightedNormal& s : samples) {
-            x.push_back(s.n.x);
-            y.push_back(s.n.y);
-            z.push_back(s.n.z);
-            w.push_back(s.weight);
+        float* out = storage.get();
+        for (size_t i = 0; i < count; ++i) {
+            out[i] = samples[i].n.x;
+            out[count + i] = samples[i].n.y;
+            out[2 * count + i] = samples[i].n.z;
+            out[3 * count + i] = samples[i].weight;
         }
+        x = out, y = out + count, z = out + 2 * count, w = out + 3 * count;
     }
-    size_t size() const { return x.size(); }
+    size_t size() const { return count; }
 };
 
 // Samples per E-step block: a lobe's terms for a block fit in L1 alongside the samples.
 constexpr size_t kEStepBlock = 64;
 
 // One E-step over all samples: accumulates Σ w z_ij and Σ w z_ij n_i per lobe, the log-likelihood
-// and the worst-explained sample. Summaries sharpen their responsibilities by their weight.
-void e_step(const SampleBlocks& s, std::span<const VmfLobe> lobes, std::span<const LobeTerms> terms, bool summaries,
-            std::vector<double>& lobe_weight, std::vector<Vec3d>& lobe_sum, double& log_likelihood, float& worst_log,
+// and the worst-explained sample.
+void e_step(const SampleBlocks& s, std::span<const VmfLobe> lobes, const LobeTermArray& terms,
+            std::array<double, kMaxLobes>& lobe_weight, std::array<Vec3d, kMaxLobes>& lobe_sum, double& log_likelihood, float& worst_log,
             size_t& worst_sample)
 {
     const size_t J = lobes.size();
     alignas(64) float log_p[kMaxLobes][kEStepBlock];
     alignas(64) float e[kMaxLobes][kEStepBlock];
-    alignas(64) float peak[kEStepBlock], sum[kEStepBlock], inv[kEStepBlock];
+    alignas(64) float peak[kEStepBlock], sum[kEStepBlock], inv[kEStepBlock], lse[kEStepBlock];
     for (size_t begin = 0; begin < s.size(); begin += kEStepBlock) {
         const size_t n = std::min(kEStepBlock, s.size() - begin);
         const float *x = &s.x[begin], *y = &s.y[begin], *z = &s.z[begin], *w = &s.w[begin];
@@ -110,26 +112,20 @@ void e_step(const SampleBlocks& s, std::span<const VmfLobe> lobes, std::span<con
                 sum[i] += e[j][i];
             }
         }
+#pragma omp simd
+        for (size_t i = 0; i < n; ++i) {
+            lse[i] = peak[i] + fast_log_at_least_one(sum[i]);
+            inv[i] = w[i] / sum[i];
+        }
         for (size_t i = 0; i < n; ++i) {
             if (!std::isfinite(peak[i])) {  // every lobe dead: the sample joins no lobe
                 inv[i] = 0.0f;
                 continue;
             }
-            const float lse = peak[i] + std::log(sum[i]);
-            log_likelihood += double(w[i]) * lse;
-            if (lse < worst_log) {
-                worst_log = lse;
+            log_likelihood += double(w[i]) * lse[i];
+            if (lse[i] < worst_log) {
+                worst_log = lse[i];
                 worst_sample = begin + i;
-            }
-            inv[i] = w[i] / sum[i];
-        }
-        if (summaries) {
-            // (α_j γ_j)^w normalized: recompute the terms sharpened, per sample.
-            for (size_t i = 0; i < n; ++i) {
-                if (inv[i] == 0.0f) continue;
-                float sharp_sum = 0.0f;
-                for (size_t j = 0; j < J; ++j) sharp_sum += (e[j][i] = fast_exp_nonpositive(w[i] * (log_p[j][i] - peak[i])));
-                inv[i] = w[i] / sharp_sum;
             }
         }
         for (size_t j = 0; j < J; ++j) {
@@ -164,19 +160,26 @@ EmResult fit_vmf_mixture(std::span<const WeightedNormal> samples, std::vector<Vm
     const size_t J = lobes.size();
     EmResult result;
     if (J == 0 || samples.empty()) return result;
+    if (J > size_t(kMaxLobes))
+        throw Error(Status::invalid_argument, "EM fits at most " + std::to_string(kMaxLobes) + " lobes at once");
 
-    double total_weight = 0.0;
-    for (const WeightedNormal& s : samples) total_weight += s.weight;
-    const double min_weight = samples.size() > 0 ? total_weight / double(samples.size()) : 1.0;
+    // A lobe dies under half the lightest sample: a bin of many normals must not make a lobe of a
+    // few count as nothing.
+    double total_weight = 0.0, min_weight = std::numeric_limits<double>::infinity();
+    for (const WeightedNormal& s : samples) {
+        total_weight += s.weight;
+        min_weight = std::min(min_weight, double(s.weight));
+    }
 
     const SampleBlocks soa(samples);
-    std::vector<double> lobe_weight(J);
-    std::vector<Vec3d> lobe_sum(J);
-    std::vector<bool> reseeded(J, false);
+    LobeTermArray terms;
+    std::array<double, kMaxLobes> lobe_weight;
+    std::array<Vec3d, kMaxLobes> lobe_sum;
+    std::array<bool, kMaxLobes> reseeded{};
     double previous = -std::numeric_limits<double>::infinity();
 
     for (int iteration = 0; iteration < settings.max_iterations; ++iteration) {
-        const std::vector<LobeTerms> terms = lobe_terms(lobes);
+        lobe_terms(lobes, terms);
         std::fill(lobe_weight.begin(), lobe_weight.end(), 0.0);
         std::fill(lobe_sum.begin(), lobe_sum.end(), Vec3d{});
         double log_likelihood = 0.0;
@@ -184,7 +187,7 @@ EmResult fit_vmf_mixture(std::span<const WeightedNormal> samples, std::vector<Vm
         size_t worst_sample = 0;
 
         // E-step (Algorithm 1 line 5, with α_j), accumulating the M-step's sums on the fly.
-        e_step(soa, lobes, terms, settings.summaries, lobe_weight, lobe_sum, log_likelihood, worst_log, worst_sample);
+        e_step(soa, lobes, terms, lobe_weight, lobe_sum, log_likelihood, worst_log, worst_sample);
         result.iterations = iteration + 1;
         result.mean_log_likelihood = log_likelihood / total_weight;
 
@@ -227,7 +230,8 @@ void vmf_responsibilities(std::span<const WeightedNormal> samples, std::span<con
 {
     const size_t J = lobes.size();
     out.assign(samples.size() * J, 0.0f);
-    const std::vector<LobeTerms> terms = lobe_terms(lobes);
+    LobeTermArray terms;
+    lobe_terms(lobes, terms);
     for (size_t i = 0; i < samples.size(); ++i) responsibilities(lobes, terms, samples[i].n, &out[i * J]);
 }
 

@@ -13,12 +13,11 @@ namespace ndfbake {
 inline constexpr int kMaxLobes = 8;
 
 struct EmSettings {
-    int max_iterations = 20;     // §7.1: "we seldom need more than 10 iterations"
-    double convergence = 1e-7;   // stop when the mean log-likelihood moves less than this
-    // Samples are summaries of finer lobes (hierarchical EM, Vasconcelos & Lippman 1999): a
-    // summary of w normals is assigned as its w normals would be jointly, h_ij ∝ (α_j e^{E[log γ_j]})^w,
-    // which is all but a hard assignment. Off: every sample is one normal.
-    bool summaries = false;
+    int max_iterations = 10;     // §7.1: "we seldom need more than 10 iterations"
+    // Stop when the mean log-likelihood moves by less than this fraction of (1 + itself).
+    // Measured on the synthetic patterns at J = 4: 1e-7 (every texel runs every iteration) gives
+    // the same fit error as 1e-3 in twice the time.
+    double convergence = 1e-3;
 };
 
 struct EmResult {

@@ -37,7 +37,7 @@ std::vector<VmfLobe> fit_from_seeds(std::span<const WeightedNormal> samples, std
     const EmSettings& em = settings.em;
     std::vector<VmfLobe> from_children = farthest_point_seeds(child_lobes, samples, count);
     const double children_fit = fit_vmf_mixture(samples, from_children, em).mean_log_likelihood;
-    if (!settings.two_starts) {
+    if (!settings.two_starts || samples.size() <= size_t(kSecondStartMinSamples)) {
         prune_dead_lobes(from_children);
         return from_children;
     }

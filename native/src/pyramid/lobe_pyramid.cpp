@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <numeric>
+#include <optional>
 
 #include "math/sphere.h"
 #include "pyramid/alignment.h"
+#include "pyramid/normal_bins.h"
 
 namespace ndfbake {
 
@@ -90,49 +92,51 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
     double done = 0.0;
     auto stage_tick = [&](double fraction) { return !tick || tick(done + share * fraction); };
 
+    // The hierarchical fit's statistics: the level below's bins, and this level's being filled.
+    const bool hierarchical = settings.method == FitMethod::hierarchical;
+    BinnedLevel finer_bins, bins;
+
     for (int l = 1; l < levels; ++l) {
         LobeLevel& level = pyramid.levels[size_t(l)];
         const LobeLevel& finer = pyramid.levels[size_t(l - 1)];
-        const bool hierarchical = settings.method == FitMethod::hierarchical;
-        TexelFitSettings fit_settings = settings.fit;
-        if (hierarchical) {
-            // Summaries are assigned almost hard, so EM on them settles like k-means: one start
-            // from the children's lobes suffices.
-            fit_settings.em.summaries = true;
-            fit_settings.two_starts = false;
-        }
+        bins = hierarchical && keeps_bins(l) ? BinnedLevel(level.size) : BinnedLevel();
         parallel_rows(level.size.height, settings.threads, [&](int y) {
-            std::vector<WeightedNormal> samples, scored, summaries;
+            std::vector<WeightedNormal> samples, scored;
             std::vector<VmfLobe> children, child(static_cast<size_t>(slots));
+            std::optional<BinAccumulator> binner;
+            if (hierarchical) binner.emplace();
             for (int x = 0; x < level.size.width; ++x) {
                 children.clear();
-                summaries.clear();
                 for (int cy = 2 * y; cy < std::min(2 * y + 2, finer.size.height); ++cy)
                     for (int cx = 2 * x; cx < std::min(2 * x + 2, finer.size.width); ++cx) {
                         pyramid.texel(l - 1, cx, cy, child);
-                        const double child_weight = footprint_weight(map.width, map.height, l - 1, cx, cy, settings.wrap);
-                        for (const VmfLobe& lobe : child) {
-                            if (!(lobe.alpha > 0.0f)) continue;
-                            children.push_back(lobe);
-                            summaries.push_back({float(resultant_from_kappa(lobe.kappa)) * lobe.mu,
-                                                 float(lobe.alpha * child_weight)});
-                        }
+                        for (const VmfLobe& lobe : child)
+                            if (lobe.alpha > 0.0f) children.push_back(lobe);
                     }
-                // The hierarchical fit still scores the budget on fine normals.
-                if (!hierarchical || budgeted) gather_footprint(map, l, x, y, settings.wrap, samples);
-                const std::span<const WeightedNormal> fit_samples = hierarchical ? summaries : samples;
+                bool gathered = !hierarchical;
+                if (hierarchical) {
+                    gathered = !accumulate_texel_bins(map, finer_bins, l, x, y, settings.wrap, *binner, scored);
+                    const std::span<const NormalBin> texel_bins = binner->finish();
+                    if (!bins.empty()) bins.append_texel(y, texel_bins);
+                    bin_samples(texel_bins, samples);
+                } else {
+                    gather_footprint(map, l, x, y, settings.wrap, samples);
+                    if (budgeted) scored = samples;
+                }
                 TexelFit fit;
                 if (budgeted) {
-                    scored = samples;
+                    // The budget scores candidates on fine normals, whichever samples EM fits.
+                    if (!gathered) gather_footprint(map, l, x, y, settings.wrap, scored);
                     subsample_footprint(scored, settings.budget_sample_cap);
                     const TexelErrorMeter meter(scored, settings.brdf, budget_directions);
-                    fit = fit_texel(fit_samples, children, fit_settings, &meter);
+                    fit = fit_texel(samples, children, settings.fit, &meter);
                 } else {
-                    fit = fit_texel(fit_samples, children, fit_settings, nullptr);
+                    fit = fit_texel(samples, children, settings.fit, nullptr);
                 }
                 store_texel(level, slots, x, y, std::move(fit.lobes), fit.error);
             }
         }, stage_tick);
+        finer_bins = std::move(bins);
         done += share;
     }
 

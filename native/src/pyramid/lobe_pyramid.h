@@ -14,19 +14,18 @@
 namespace ndfbake {
 
 enum class FitMethod {
-    // Every level from all the fine normals it covers (§7.1).
+    // Every level from all the fine normals it covers (§7.1): the reference the hierarchical fit
+    // is measured against (examples/speed_ratios.sh).
     per_level,
-    // Every level from the sufficient statistics of the level below: the children's lobes, each a
-    // weighted mean resultant vector, are the samples of a mixture reduction by EM (Vasconcelos &
-    // Lippman's hierarchical EM). Not the default: measured against per_level at J = 4 on 256²
-    // maps it is 2.2-7× faster but its error compounds level by level (+10% on fbm, +3% on weave,
-    // +210% on scratches); refining each texel with a few EM iterations on its fine normals did
-    // not close the gap (weave +59%).
+    // Every level from the sufficient statistics of the level below: each texel's normals binned
+    // by direction (pyramid/normal_bins.h), a texel's bins the sum of its children's, and EM run
+    // on the bins. EM sees at most kMaxBinSamples samples per texel whatever its footprint, so
+    // the levels above 4 cost a fraction of a per-level fit's.
     hierarchical,
 };
 
 struct PyramidSettings {
-    FitMethod method = FitMethod::per_level;
+    FitMethod method = FitMethod::hierarchical;
     TexelFitSettings fit;
     BaseBrdf brdf = BaseBrdf::ggx(0.5f);
     WrapMode wrap = WrapMode::wrap;
@@ -78,9 +77,9 @@ public:
     std::vector<bool> slots_used() const;
 };
 
-// Fits every level ≥ 1 from all the fine normals under each texel (§7.1), seeded from the level
-// below, then aligns lobe slots from the top level down. `tick` gets the overall fraction done
-// and may cancel (Error(cancelled)).
+// Fits every level ≥ 1 (from its fine normals or its bins, as settings.method says), seeded from
+// the level below, then aligns lobe slots from the top level down. `tick` gets the overall
+// fraction done and may cancel (Error(cancelled)).
 LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& settings,
                                const ProgressTick& tick);
 
