@@ -4,7 +4,7 @@
 # the bake recorded in report.json ("peak_memory_bytes": the process's peak resident set, from
 # getrusage) beside the estimate the library checked against its memory limit before starting.
 #   examples/bench_memory.sh [SIZE] [LOBES]      (build first: scripts/build.sh)
-# A 4096 x 4096 bake at 4 lobes takes about 5 minutes on 2 cores and must stay under 2 GiB.
+# A 4096 x 4096 bake at 4 lobes takes about 15 seconds on 2 cores and must stay under 2 GiB.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 size=${1:-4096}
