@@ -43,7 +43,7 @@ bake options:
                        (for renderers without MIP levels; layout in report.json)
   --method M           hierarchical (default: every level from the binned normals of the level
                        below) or per-level (every level from all its fine normals: Han's
-                       reference, several times slower)
+                       reference, 2-5x slower)
   --iterations N       EM iterations per texel at most (default 10)
   --starts N           2 (default): EM from the finer level's lobes and from the farthest
                        samples, keeping the likelier; 1: from the finer level's lobes (Han 7.1)
