@@ -721,6 +721,21 @@ TEST_F(IoTest, ExrRoundTripKeepsPixelsAndTypedAttributes)
     EXPECT_EQ(spec.find_attribute("ndfbake:source")->type(), OIIO::TypeString);
 }
 
+TEST_F(IoTest, RunLengthFilesRoundTripExactly)
+{
+    // A level-0 lobe slot: zero wherever the texel's lobe sits in another slot.
+    std::vector<float> rgba = test_rgba(16, 8);
+    for (size_t i = 0; i < rgba.size(); i += 12) std::fill_n(&rgba[i], 8, 0.0f);
+    const std::string file = path("level0.exr");
+    write_rgba_exr(file, 16, 8, rgba.data(), PixelPrecision::single, {}, ExrCompression::run_length);
+    int width = 0, height = 0;
+    EXPECT_EQ(read_rgba_exr(file, width, height), rgba);
+    const ImageInfo info = read_image_info(file);
+    EXPECT_NE(std::find(info.attributes.begin(), info.attributes.end(),
+                        std::pair<std::string, std::string>("compression", "rle")),
+              info.attributes.end());
+}
+
 TEST_F(IoTest, HalfPrecisionRoundTripIsWithinHalfTolerance)
 {
     const std::vector<float> rgba = test_rgba(16, 8);

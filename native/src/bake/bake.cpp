@@ -375,7 +375,8 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
             write_rgba_exr((staging / names[size_t(job)]).string(), size.width, size.height, rgba.data(),
                            write.precision,
                            file_attributes(pyramid, decoded, settings, write, level, lobe, stats[size_t(level)].fit.mean,
-                                           "vmf lobe: R = alpha, GBA = alpha * r"));
+                                           "vmf lobe: R = alpha, GBA = alpha * r"),
+                           level == 0 ? ExrCompression::run_length : ExrCompression::zlib);
         }, [&](double fraction) { return !progress || progress("write", fraction); });
         if (!write.color_path.empty()) {
             for (int level = 0; level < pyramid.level_count(); ++level) {

@@ -14,16 +14,16 @@ namespace ndfbake {
 namespace {
 
 // zlib at its fastest level: lossless like the default level, files about 6% larger, written
-// 1.5× faster (compressing the level-0 textures is most of a bake's write time).
-constexpr const char* kLobeCompression = "zip:1";
+// 1.5× faster (compressing the lobe textures is most of a bake's write time).
+constexpr const char* kZlibCompression = "zip:1";
 
 OIIO::ImageSpec exr_spec(int width, int height, PixelPrecision precision,
-                         const std::vector<ExrAttribute>& attributes)
+                         const std::vector<ExrAttribute>& attributes, ExrCompression compression)
 {
     OIIO::ImageSpec spec(width, height, 4,
                          precision == PixelPrecision::half ? OIIO::TypeDesc::HALF
                                                            : OIIO::TypeDesc::FLOAT);
-    spec.attribute("compression", kLobeCompression);
+    spec.attribute("compression", compression == ExrCompression::run_length ? "rle" : kZlibCompression);
     for (const ExrAttribute& attribute : attributes)
         std::visit([&](const auto& value) { spec.attribute(attribute.name, value); },
                    attribute.value);
@@ -50,13 +50,14 @@ std::string write_errno_reason(int error)
 }  // namespace
 
 void write_rgba_exr(const std::string& path, int width, int height, const float* rgba,
-                    PixelPrecision precision, const std::vector<ExrAttribute>& attributes)
+                    PixelPrecision precision, const std::vector<ExrAttribute>& attributes,
+                    ExrCompression compression)
 {
     if (width <= 0 || height <= 0 || !rgba)
         throw Error(Status::invalid_argument,
                     "cannot write '" + path + "': no pixels (" + std::to_string(width) + " x " +
                         std::to_string(height) + ")");
-    const OIIO::ImageSpec spec = exr_spec(width, height, precision, attributes);
+    const OIIO::ImageSpec spec = exr_spec(width, height, precision, attributes, compression);
     write_file_atomic(path, [&](const std::string& temp_path) {
         // Created by format name, not extension: the file is EXR whatever `path` ends with.
         std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create("openexr");

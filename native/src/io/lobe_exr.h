@@ -18,10 +18,17 @@ struct ExrAttribute {
 
 enum class PixelPrecision { half, single };
 
-// Writes `rgba` (width * height * 4 floats, row-major, top row first) as a zip-compressed EXR
+// Both lossless. zlib (at its fastest level) for dense texels; run-length for images that are
+// mostly runs of equal texels, such as a level-0 lobe slot, zero wherever the texel's one lobe
+// sits in another slot: measured on a 2048² fbm bake, RLE writes level 0 1.4× faster than zlib
+// for 14% more bytes in all.
+enum class ExrCompression { zlib, run_length };
+
+// Writes `rgba` (width * height * 4 floats, row-major, top row first) as a compressed EXR
 // with the given header attributes, atomically (see write_file_atomic). Throws Error(io_error).
 void write_rgba_exr(const std::string& path, int width, int height, const float* rgba,
-                    PixelPrecision precision, const std::vector<ExrAttribute>& attributes);
+                    PixelPrecision precision, const std::vector<ExrAttribute>& attributes,
+                    ExrCompression compression = ExrCompression::zlib);
 
 struct ImageInfo {
     std::string format;  // OpenImageIO format name, e.g. "openexr"

@@ -1,10 +1,13 @@
 #include "pyramid/alignment.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <optional>
 #include <vector>
+
+#include "error.h"
 
 namespace ndfbake {
 
@@ -58,7 +61,10 @@ void assign_slots(std::span<const VmfLobe> lobes, std::span<const VmfLobe> paren
 {
     const int slots = int(std::max(parent.size(), left.size()));
     const int count = int(lobes.size());
-    std::vector<bool> lobe_done(size_t(count), false), slot_used(size_t(std::max(slots, count)), false);
+    if (std::max(slots, count) > kMaxLobes)
+        throw Error(Status::invalid_argument, "slot assignment takes at most " + std::to_string(kMaxLobes) + " lobes");
+    // On the stack: alignment visits every texel of every level.
+    std::array<bool, kMaxLobes> lobe_done{}, slot_used{};
     std::fill(slot_of_lobe.begin(), slot_of_lobe.end(), -1);
     for (int assigned = 0; assigned < count; ++assigned) {
         int best_lobe = -1, best_slot = -1;
@@ -102,6 +108,8 @@ void align_lobe_slots(LobePyramid& pyramid, const PyramidSettings& settings, con
             std::vector<VmfLobe> parent(static_cast<size_t>(slots)), left(static_cast<size_t>(slots)), current(static_cast<size_t>(slots));
             std::vector<VmfLobe> ancestor(static_cast<size_t>(slots));
             std::vector<WeightedNormal> samples;
+            std::vector<VmfLobe> lobes;
+            std::vector<int> slot_of;
             if (l == 0) {
                 // Each level-0 texel joins the slot of the top level's most responsible lobe.
                 std::optional<MostResponsibleSlot> slot_of_normal;
@@ -125,8 +133,11 @@ void align_lobe_slots(LobePyramid& pyramid, const PyramidSettings& settings, con
                     left_span = left;
                 }
                 const size_t t = size_t(y) * size_t(width) + size_t(x);
-                std::vector<VmfLobe> lobes = pyramid.texel_lobes(l, x, y);
-                std::vector<int> slot_of(lobes.size());
+                pyramid.texel(l, x, y, current);
+                lobes.clear();
+                for (const VmfLobe& lobe : current)
+                    if (lobe.alpha > 0.0f) lobes.push_back(lobe);
+                slot_of.resize(lobes.size());
                 assign_slots(lobes, parent, left_span, slot_of);
 
                 if (settings.alignment_strength > 0.0f && lobes.size() > 1) {
