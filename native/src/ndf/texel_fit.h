@@ -14,6 +14,10 @@ namespace ndfbake {
 // lobes only: measured on the synthetic patterns, the second start changes nothing there (few
 // samples have few local optima) and costs a third of the fit.
 inline constexpr int kSecondStartMinSamples = 64;
+// ... and runs at most this many EM iterations: its seeds, the finer level's lobes, already sit on
+// its few samples (at level 2 they are the fine normals). Measured on the synthetic patterns at
+// 1024²: the same error as 10 iterations (±1%), a tenth less fitting time.
+inline constexpr int kFewSampleIterations = 3;
 
 // EM's starting κ is capped: seeds taken from finer levels can be near kKappaMax, and a start
 // that sharp makes the first E-step a hard assignment that EM cannot recover from.
