@@ -8,10 +8,6 @@
 #include <thread>
 #include <vector>
 
-#if defined(__SSE__)
-#include <xmmintrin.h>
-#endif
-
 #include "error.h"
 
 namespace ndfbake {
@@ -19,16 +15,6 @@ namespace ndfbake {
 namespace {
 // How often the caller's progress callback runs: often enough for a responsive Esc in Blender.
 constexpr std::chrono::milliseconds kProgressInterval{50};
-// Our workers treat denormal floats as zero (x86's FTZ and DAZ): a denormal costs about a hundred
-// cycles per operation, and EM's vanishing responsibilities and the error sums produce them in
-// bulk. Only threads we start are changed, never the caller's (Blender's).
-void flush_denormals_on_this_thread()
-{
-#if defined(__SSE__)
-    _mm_setcsr(_mm_getcsr() | 0x8040);  // FTZ (bit 15) | DAZ (bit 6)
-#endif
-}
-
 }  // namespace
 
 int resolve_thread_count(int requested)
@@ -49,7 +35,6 @@ void parallel_rows(int rows, int threads, const std::function<void(int)>& body, 
     int workers_running = std::min(resolve_thread_count(threads), std::max(rows, 1));
 
     auto worker = [&] {
-        flush_denormals_on_this_thread();
         for (;;) {
             if (stop.load(std::memory_order_relaxed)) break;
             const int row = next_row.fetch_add(1);
