@@ -10,6 +10,7 @@
 #include <numeric>
 #include <random>
 
+#include "tangent/tangent_math.h"
 #include "tangent_fixtures.h"
 
 namespace ndfbake {
@@ -34,6 +35,23 @@ Vec3 dp_du(const Vec3& p0, const Vec3& p1, const Vec3& p2, std::array<float, 2> 
     const Vec3 e1 = p1 - p0, e2 = p2 - p0;
     return {float((r2 * e1.x - r1 * e2.x) / det), float((r2 * e1.y - r1 * e2.y) / det),
             float((r2 * e1.z - r1 * e2.z) / det)};
+}
+
+TEST(TangentMath, NormalizeKeepZeroIsUnitWhereverTheSquaredLengthLeavesFloatRange)
+{
+    // Squares below FLT_MIN (denormal, or zero), normal, and overflowing.
+    for (float scale : {1e-42f, 1e-30f, 1.3e-19f, 1e-10f, 1.0f, 1e10f, 1e25f, 3e38f}) {
+        for (const Vec3& direction : {Vec3{0, 0, -1}, Vec3{0.6f, -0.8f, 0}, Vec3{1, 2, 2}}) {
+            const Vec3 v = direction * scale;
+            const float largest = std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
+            if (!(largest > 0.0f) || !std::isfinite(largest)) continue;  // underflowed or overflowed
+            const Vec3 n = normalize_keep_zero(v);
+            EXPECT_NEAR(length(n), 1.0f, 1e-6f) << scale;
+            EXPECT_GT(dot(n, direction), 0.0f) << scale;
+        }
+    }
+    EXPECT_EQ(length(normalize_keep_zero(Vec3{})), 0.0f);
+    EXPECT_EQ(length(normalize_keep_zero(Vec3{INFINITY, 1, 0})), 0.0f);
 }
 
 TEST(TangentFrames, PlaneWithAffineUVsHasTheAnalyticFrameAndMagnitudes)

@@ -26,17 +26,18 @@ inline bool mikk_not_zero(float v) { return std::fabs(v) > 1.17549435e-38f; }
 inline uint32_t float_bits(float v) { return std::bit_cast<uint32_t>(v); }
 
 // v normalized; a zero vector stays zero (the reference keeps zero vectors rather than producing
-// NaN, and so must we to match it). Where the squared length overflows (components past ~1e19,
-// e.g. from normals that were never normalized), v is scaled down first; a vector with an infinite
-// component has no direction and becomes zero.
+// NaN, and so must we to match it). Where the squared length leaves float's normal range, v is
+// scaled by its largest component first: past ~1e19 (normals never normalized) it overflows, and
+// below ~1e-19 it is a denormal with too few bits left for a unit result (fuzzing found a tangent
+// of length 1.02 that way). A vector with an infinite component has no direction and becomes zero.
 inline Vec3 normalize_keep_zero(const Vec3& v)
 {
-    const float len = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
-    if (len != 0.0f && std::isfinite(len)) return v * (1.0f / len);
-    if (len == 0.0f) return v;
+    const float len2 = v.x * v.x + v.y * v.y + v.z * v.z;
+    if (len2 >= 1.17549435e-38f && std::isfinite(len2)) return v * (1.0f / std::sqrt(len2));
     const float largest = std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
+    if (largest == 0.0f) return v;
     if (!std::isfinite(largest)) return Vec3{};
-    const Vec3 s = v * (1.0f / largest);
+    const Vec3 s = v / largest;  // a division: 1 / largest overflows for a denormal largest
     return s * (1.0f / std::sqrt(s.x * s.x + s.y * s.y + s.z * s.z));
 }
 
