@@ -1,6 +1,9 @@
 // von Mises-Fisher lobes on S² (Han et al. 2007, §7): the value type and its scalar functions.
 #pragma once
 
+#include <cmath>
+#include <limits>
+
 #include "math/vec3.h"
 
 namespace ndfbake {
@@ -40,6 +43,14 @@ double log_vmf_normalizer_shifted(double kappa);
 inline float log_vmf_density(const VmfLobe& lobe, const Vec3& n, float log_norm_shifted)
 {
     return log_norm_shifted + lobe.kappa * (dot(lobe.mu, n) - 1.0f);
+}
+
+// log α + log C(κ) + κ: a mixture component's weighted, shifted normalizer, so that
+// log(α γ(n)) = log_vmf_density(lobe, n, this); −∞ for an empty lobe (α = 0).
+inline float log_weighted_normalizer(const VmfLobe& lobe)
+{
+    if (!(lobe.alpha > 0.0f)) return -std::numeric_limits<float>::infinity();
+    return std::log(lobe.alpha) + float(log_vmf_normalizer_shifted(lobe.kappa));
 }
 
 // The Legendre coefficient A_l(κ) = I_{l+1/2}(κ) / I_{1/2}(κ) of a normalized vMF for l = 0..lmax

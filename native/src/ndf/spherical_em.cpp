@@ -5,9 +5,9 @@
 
 #include <algorithm>
 #include <array>
-#include <memory>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 namespace ndfbake {
 
@@ -16,30 +16,22 @@ namespace {
 // A lobe whose total responsibility is under half a sample explains nothing (it is "dead").
 constexpr double kDeadLobeSampleWeight = 0.5;
 
-struct LobeTerms {
-    float log_alpha;           // −∞ for a dead lobe
-    float log_norm_shifted;
-};
-
-// Per lobe, on the stack: EM recomputes them every iteration, for texels of a dozen samples too.
-using LobeTermArray = std::array<LobeTerms, kMaxLobes>;
+// log_weighted_normalizer per lobe, on the stack: EM recomputes them every iteration, for texels
+// of a dozen samples too.
+using LobeTermArray = std::array<float, kMaxLobes>;
 
 void lobe_terms(std::span<const VmfLobe> lobes, LobeTermArray& terms)
 {
-    for (size_t j = 0; j < lobes.size(); ++j) {
-        terms[j].log_alpha = lobes[j].alpha > 0.0f ? std::log(lobes[j].alpha)
-                                                   : -std::numeric_limits<float>::infinity();
-        terms[j].log_norm_shifted = float(log_vmf_normalizer_shifted(lobes[j].kappa));
-    }
+    for (size_t j = 0; j < lobes.size(); ++j) terms[j] = log_weighted_normalizer(lobes[j]);
 }
 
 // Returns log Σ_j α_j γ_j(n) and fills z[j] ∝ α_j γ_j(n), normalized: the E-step's
 // responsibilities, from one exponential per lobe (shifted by the largest term: log-sum-exp).
-float responsibilities(std::span<const VmfLobe> lobes, std::span<const LobeTerms> terms, const Vec3& n, float* z)
+float responsibilities(std::span<const VmfLobe> lobes, const LobeTermArray& terms, const Vec3& n, float* z)
 {
     float max_log = -std::numeric_limits<float>::infinity();
     for (size_t j = 0; j < lobes.size(); ++j) {
-        z[j] = terms[j].log_alpha + log_vmf_density(lobes[j], n, terms[j].log_norm_shifted);
+        z[j] = log_vmf_density(lobes[j], n, terms[j]);
         max_log = std::max(max_log, z[j]);
     }
     if (!std::isfinite(max_log)) {  // every lobe is dead: nobody is responsible
@@ -97,7 +89,7 @@ void e_step(const SampleBlocks& s, std::span<const VmfLobe> lobes, const LobeTer
         for (size_t i = 0; i < n; ++i) peak[i] = -std::numeric_limits<float>::infinity();
         for (size_t j = 0; j < J; ++j) {
             const float k = lobes[j].kappa, mx = lobes[j].mu.x, my = lobes[j].mu.y, mz = lobes[j].mu.z;
-            const float base = terms[j].log_alpha + terms[j].log_norm_shifted - k;
+            const float base = terms[j] - k;
 #pragma omp simd
             for (size_t i = 0; i < n; ++i) {
                 log_p[j][i] = base + k * (mx * x[i] + my * y[i] + mz * z[i]);

@@ -24,15 +24,13 @@ float slot_score(const VmfLobe& lobe, int slot, std::span<const VmfLobe> parent,
     return score;
 }
 
-// The E-step's argmax over one mixture for many normals: log α_s + log C(κ_s) per slot computed
-// once (level 0 asks it of every fine normal).
+// The E-step's argmax over one mixture for many normals: each slot's log_weighted_normalizer
+// computed once (level 0 asks it of every fine normal).
 class MostResponsibleSlot {
 public:
     explicit MostResponsibleSlot(std::span<const VmfLobe> mixture) : mixture_(mixture.begin(), mixture.end())
     {
-        for (const VmfLobe& lobe : mixture_)
-            log_weight_.push_back(lobe.alpha > 0.0f ? std::log(lobe.alpha) + float(log_vmf_normalizer_shifted(lobe.kappa))
-                                                    : -std::numeric_limits<float>::infinity());
+        for (const VmfLobe& lobe : mixture_) log_weight_.push_back(log_weighted_normalizer(lobe));
     }
     int operator()(const Vec3& n) const
     {
