@@ -131,10 +131,7 @@ void align_lobe_slots(LobePyramid& pyramid, const PyramidSettings& settings, con
                     left_span = left;
                 }
                 const size_t t = size_t(y) * size_t(width) + size_t(x);
-                pyramid.texel(l, x, y, current);
-                lobes.clear();
-                for (const VmfLobe& lobe : current)
-                    if (lobe.alpha > 0.0f) lobes.push_back(lobe);
+                pyramid.texel_lobes(l, x, y, lobes);
                 slot_of.resize(lobes.size());
                 assign_slots(lobes, parent, left_span, slot_of);
 
