@@ -5,6 +5,16 @@
 
 namespace ndfbake {
 
+namespace {
+
+// See accumulate_texel_bins.
+bool children_cover_footprint(LevelSize finer, int x, int y, WrapMode wrap)
+{
+    return wrap == WrapMode::clamp || (2 * x + 1 < finer.width && 2 * y + 1 < finer.height);
+}
+
+}  // namespace
+
 uint32_t normal_bin_index(const Vec3& n)
 {
     // Hemi-octahedral map: project onto |x| + |y| + z = 1, then turn the diamond by 45° to fill
@@ -63,11 +73,6 @@ std::span<const NormalBin> BinnedLevel::texel(int x, int y) const
 }
 
 bool keeps_bins(int level) { return level < 31 && (uint64_t(1) << (2 * level)) > uint64_t(kNormalBinCount); }
-
-bool children_cover_footprint(LevelSize finer, int x, int y, WrapMode wrap)
-{
-    return wrap == WrapMode::clamp || (2 * x + 1 < finer.width && 2 * y + 1 < finer.height);
-}
 
 bool accumulate_texel_bins(const NormalMap& map, const BinnedLevel& finer, int level, int x, int y, WrapMode wrap,
                            BinAccumulator& bins, std::vector<WeightedNormal>& gathered)

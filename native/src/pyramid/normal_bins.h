@@ -70,14 +70,11 @@ private:
 // footprint; below that, gathering the footprint costs no more and keeps nothing.
 bool keeps_bins(int level);
 
-// Whether a texel's bins are exactly the sum of its children's: always when clamping (children
-// past the edge cover nothing), and when wrapping unless a child would lie past the finer level's
-// edge (its wrapped footprint is then no texel of that level).
-bool children_cover_footprint(LevelSize finer, int x, int y, WrapMode wrap);
-
 // Adds texel (x, y) of `level` to `bins`: its children's bins from `finer` where it holds them
 // (not empty) and they cover the footprint, returning true; otherwise the footprint's fine normals,
-// gathered into `gathered`, returning false.
+// gathered into `gathered`, returning false. Children cover the footprint always when clamping
+// (children past the edge cover nothing), and when wrapping unless a child would lie past the
+// finer level's edge (its wrapped footprint is then no texel of that level).
 bool accumulate_texel_bins(const NormalMap& map, const BinnedLevel& finer, int level, int x, int y, WrapMode wrap,
                            BinAccumulator& bins, std::vector<WeightedNormal>& gathered);
 
