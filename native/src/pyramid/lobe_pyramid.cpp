@@ -119,20 +119,19 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
                         for (const VmfLobe& lobe : child)
                             if (lobe.alpha > 0.0f) children.push_back(lobe);
                     }
-                bool gathered = !hierarchical;
+                // `scored`: the fine normals the budget scores candidates on, whichever samples EM fits.
                 if (hierarchical) {
-                    gathered = !accumulate_texel_bins(map, finer_bins, l, x, y, settings.wrap, *binner, scored);
+                    const bool summed = accumulate_texel_bins(map, finer_bins, l, x, y, settings.wrap, *binner, scored);
                     const std::span<const NormalBin> texel_bins = binner->finish();
                     if (!bins.empty()) bins.append_texel(y, texel_bins);
                     bin_samples(texel_bins, samples);
+                    if (budgeted && summed) gather_footprint(map, l, x, y, settings.wrap, scored);
                 } else {
                     gather_footprint(map, l, x, y, settings.wrap, samples);
                     if (budgeted) scored = samples;
                 }
                 TexelFit fit;
                 if (budgeted) {
-                    // The budget scores candidates on fine normals, whichever samples EM fits.
-                    if (!gathered) gather_footprint(map, l, x, y, settings.wrap, scored);
                     subsample_footprint(scored, settings.budget_sample_cap);
                     const TexelErrorMeter meter(scored, settings.brdf, budget_directions);
                     fit = fit_texel(samples, children, settings.fit, &meter);
