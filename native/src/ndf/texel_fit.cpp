@@ -34,12 +34,12 @@ void prune_dead_lobes(std::vector<VmfLobe>& lobes)
 std::vector<VmfLobe> fit_from_seeds(std::span<const WeightedNormal> samples, std::span<const VmfLobe> child_lobes,
                                     int count, const TexelFitSettings& settings)
 {
+    const bool few_samples = samples.size() <= size_t(kSecondStartMinSamples);
     EmSettings em = settings.em;
-    if (samples.size() <= size_t(kSecondStartMinSamples))
-        em.max_iterations = std::min(em.max_iterations, kFewSampleIterations);
+    if (few_samples) em.max_iterations = std::min(em.max_iterations, kFewSampleIterations);
     std::vector<VmfLobe> from_children = farthest_point_seeds(child_lobes, samples, count);
     const double children_fit = fit_vmf_mixture(samples, from_children, em).mean_log_likelihood;
-    if (!settings.two_starts || samples.size() <= size_t(kSecondStartMinSamples)) {
+    if (!settings.two_starts || few_samples) {
         prune_dead_lobes(from_children);
         return from_children;
     }
