@@ -355,25 +355,25 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
     BakeOutcome outcome;
     try {
         // One job per file, on every core: compressing the level-0 textures is most of the cost.
-        // Jobs run level 0 first, so the largest files start together.
+        // Jobs [0, lobe_jobs) are the (level, slot) textures, level 0 first so that the largest
+        // files start together; the rest one atlas per slot.
         std::vector<std::string> names;
         for (int level = 0; level < pyramid.level_count(); ++level)
             for (int lobe = 0; lobe < pyramid.slots; ++lobe) names.push_back(lobe_file_name(level, lobe));
-        const int atlas_jobs = write.atlas ? pyramid.slots : 0;
-        const int jobs = int(names.size()) + atlas_jobs;
-        for (int lobe = 0; lobe < atlas_jobs; ++lobe) names.push_back(atlas_file_name(lobe));
+        const int lobe_jobs = int(names.size());
+        if (write.atlas)
+            for (int lobe = 0; lobe < pyramid.slots; ++lobe) names.push_back(atlas_file_name(lobe));
         const AtlasLayout layout = pyramid_atlas_layout(pyramid);
-        parallel_rows(jobs, settings.threads, [&](int job) {
-            if (job >= jobs - atlas_jobs) {
-                write_atlas(pyramid, decoded, settings, write, layout, job - (jobs - atlas_jobs),
-                            (staging / names[size_t(job)]).string());
+        parallel_rows(int(names.size()), settings.threads, [&](int job) {
+            const std::string path = (staging / names[size_t(job)]).string();
+            if (job >= lobe_jobs) {
+                write_atlas(pyramid, decoded, settings, write, layout, job - lobe_jobs, path);
                 return;
             }
             const int level = job / pyramid.slots, lobe = job % pyramid.slots;
             const LevelSize size = pyramid.size(level);
             const std::vector<float> rgba = lobe_texture(pyramid, level, lobe);
-            write_rgba_exr((staging / names[size_t(job)]).string(), size.width, size.height, rgba.data(),
-                           write.precision,
+            write_rgba_exr(path, size.width, size.height, rgba.data(), write.precision,
                            file_attributes(pyramid, decoded, settings, write, level, lobe, stats[size_t(level)].fit.mean,
                                            "vmf lobe: R = alpha, GBA = alpha * r"),
                            level == 0 ? ExrCompression::run_length : ExrCompression::zlib);
