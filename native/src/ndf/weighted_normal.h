@@ -9,8 +9,8 @@
 namespace ndfbake {
 
 // A fine normal (unit n), or a summary of many: the mean resultant vector of a bin of normals
-// (|n| ≤ 1, pyramid/normal_bins.h). EM treats both alike, since a lobe's expected log-likelihood over a set of
-// normals depends on them only through their mean (log γ is linear in n).
+// (|n| ≤ 1, pyramid/normal_bins.h). EM treats both alike, since a lobe's expected log-likelihood
+// over a set of normals depends on them only through their mean (log γ is linear in n).
 struct WeightedNormal {
     Vec3 n;
     float weight;    // > 0: how many fine normals this stands for

@@ -1,11 +1,11 @@
 #include "tangent/tangent_space.h"
 
 #include <algorithm>
-#include <utility>
 #include <array>
 #include <atomic>
 #include <cstring>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "error.h"
@@ -60,18 +60,18 @@ std::pair<float, float> derivative_lengths(const Vec3& v1, const Vec3& v2, const
     const double t21x = double(t2.x) - t1.x, t21y = double(t2.y) - t1.y;
     const double t31x = double(t3.x) - t1.x, t31y = double(t3.y) - t1.y;
     const double area = std::fabs(t21x * t31y - t21y * t31x);
-    double s2 = 0.0, t2_ = 0.0;
+    double os_squared = 0.0, ot_squared = 0.0;
     for (int k = 0; k < 3; ++k) {
         const double d1 = double(v2[k]) - v1[k], d2 = double(v3[k]) - v1[k];
         const double os = d1 * t31y - d2 * t21y, ot = -d1 * t31x + d2 * t21x;
-        s2 += os * os;
-        t2_ += ot * ot;
+        os_squared += os * os;
+        ot_squared += ot * ot;
     }
     auto length = [&](double squared) {
         const double value = std::sqrt(squared) / area;
         return float(value < kMaxDerivativeLength ? value : kMaxDerivativeLength);  // NaN (0/0) too
     };
-    return {length(s2), length(t2_)};
+    return {length(os_squared), length(ot_squared)};
 }
 
 bool same_position(const Vec3& a, const Vec3& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
