@@ -232,6 +232,21 @@ def load_pixels(path):
     return pixels.reshape(height, width, 4)
 
 
+def configure_render(scene, width, height, cycles_samples, eevee_samples=None):
+    """What every test render shares: `width` x `height` at 100%, a linear EXR through the Standard
+    view transform, Cycles on the CPU with `cycles_samples` and no denoising (Debian's Blender has
+    no OpenImageDenoise); EEVEE's render samples when given."""
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    scene.render.resolution_percentage = 100
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.view_settings.view_transform = "Standard"
+    scene.cycles.samples = cycles_samples
+    scene.cycles.use_denoising = False
+    scene.cycles.device = "CPU"
+    if eevee_samples is not None:
+        scene.eevee.taa_render_samples = eevee_samples
+
+
 def render_pixels(scene, path):
     """Renders the scene with its own settings (the caller chose engine and file format) into
     `path` and returns the saved image's pixels (load_pixels)."""

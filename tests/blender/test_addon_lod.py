@@ -105,16 +105,11 @@ def _emission_material(name):
 def _render_cycles(path, width, height):
     scene = bpy.context.scene
     scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = 1
-    scene.cycles.use_denoising = False
+    h.configure_render(scene, width, height, cycles_samples=1)
     scene.cycles.filter_width = 0.01  # one ray through each pixel's centre
     scene.cycles.pixel_filter_type = "BOX"
     scene.cycles.use_adaptive_sampling = False
-    scene.view_settings.view_transform = "Standard"
-    scene.render.image_settings.file_format = "OPEN_EXR"
     scene.render.image_settings.color_depth = "32"
-    _resolution(width, height)
     return h.render_pixels(scene, path)
 
 

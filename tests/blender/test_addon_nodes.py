@@ -74,20 +74,13 @@ def probe_material(name, image, output):
 
 def render(scene, engine, path, width, height):
     scene.render.engine = engine
-    scene.render.resolution_x, scene.render.resolution_y = width, height
-    scene.render.resolution_percentage = 100
+    h.configure_render(scene, width, height, cycles_samples=1, eevee_samples=1)
     scene.render.filter_size = 0.0
-    scene.render.image_settings.file_format = "OPEN_EXR"
     scene.render.image_settings.color_depth = "32"
-    scene.view_settings.view_transform = "Standard"
     scene.view_settings.look = "None"
     scene.view_settings.exposure = 0.0
     scene.view_settings.gamma = 1.0
-    scene.cycles.samples = 1
-    scene.cycles.use_denoising = False
     scene.cycles.filter_width = 0.01
-    scene.cycles.device = "CPU"
-    scene.eevee.taa_render_samples = 1
     scene.world = None
     return h.render_pixels(scene, path)
 

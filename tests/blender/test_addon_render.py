@@ -31,14 +31,7 @@ def setup_scene():
     world = bpy.data.worlds.new("World")
     world.color = (0.05, 0.05, 0.05)
     scene.world = world
-    scene.render.resolution_x = scene.render.resolution_y = SIZE
-    scene.render.resolution_percentage = 100
-    scene.render.image_settings.file_format = "OPEN_EXR"
-    scene.view_settings.view_transform = "Standard"
-    scene.cycles.samples = 4
-    scene.cycles.use_denoising = False
-    scene.cycles.device = "CPU"
-    scene.eevee.taa_render_samples = 4
+    h.configure_render(scene, SIZE, SIZE, cycles_samples=4, eevee_samples=4)
     return scene
 
 
@@ -90,13 +83,7 @@ def test_white_furnace_keeps_the_energy_of_the_fine_normals():
         world = bpy.data.worlds.new("Furnace")
         world.color = (1.0, 1.0, 1.0)
         scene.world = world
-        scene.render.resolution_x = scene.render.resolution_y = 32
-        scene.render.resolution_percentage = 100
-        scene.render.image_settings.file_format = "OPEN_EXR"
-        scene.view_settings.view_transform = "Standard"
-        scene.cycles.samples = 64
-        scene.cycles.use_denoising = False
-        scene.cycles.device = "CPU"
+        h.configure_render(scene, 32, 32, cycles_samples=64)
 
         def mean(name):
             return float(render(scene, "CYCLES", os.path.join(directory, name + ".exr")).mean())
