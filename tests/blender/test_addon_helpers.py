@@ -24,8 +24,13 @@ REPO = os.path.normpath(os.path.join(HERE, "..", ".."))
 ADDON_PARENT = os.path.join(REPO, "addon")
 
 
+def _script_arguments():
+    """The arguments after Blender's `--`."""
+    return sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+
+
 def arguments():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    argv = _script_arguments()
     library = os.path.abspath(argv[0]) if argv else os.path.join(REPO, "build", "native", "libndfbake.so")
     zip_path = os.path.abspath(argv[1]) if len(argv) > 1 else ""
     return library, zip_path
@@ -287,7 +292,7 @@ def run_window_test(name, state, step):
     to the next call) until it calls finish_window_test. OUTDIR, the third argument after `--`
     (else a temporary folder), goes to state["out"]; the add-on is imported first. An exception,
     or time.time() passing state["deadline"], fails the test."""
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    argv = _script_arguments()
     state["out"] = os.path.abspath(argv[2]) if len(argv) > 2 else temp_dir("ndfb-%s-" % name)
     os.makedirs(state["out"], exist_ok=True)
     import_addon()
