@@ -104,21 +104,26 @@ void e_step(const SampleBlocks& s, std::span<const VmfLobe> lobes, const LobeTer
                 sum[i] += e[j][i];
             }
         }
+        // A sample that every lobe is dead for (peak −∞) joins no lobe and adds no likelihood.
+        // The block's likelihood is summed in float (64 terms) and handed to the double total.
 #pragma omp simd
         for (size_t i = 0; i < n; ++i) {
             lse[i] = peak[i] + fast_log_at_least_one(sum[i]);
             inv[i] = w[i] / sum[i];
         }
+        float block_likelihood = 0.0f, block_worst = std::numeric_limits<float>::infinity();
+#pragma omp simd reduction(+ : block_likelihood) reduction(min : block_worst)
         for (size_t i = 0; i < n; ++i) {
-            if (!std::isfinite(peak[i])) {  // every lobe dead: the sample joins no lobe
-                inv[i] = 0.0f;
-                continue;
-            }
-            log_likelihood += double(w[i]) * lse[i];
-            if (lse[i] < worst_log) {
-                worst_log = lse[i];
-                worst_sample = begin + i;
-            }
+            const bool live = peak[i] > -std::numeric_limits<float>::infinity();
+            inv[i] = live ? inv[i] : 0.0f;
+            lse[i] = live ? lse[i] : std::numeric_limits<float>::infinity();
+            block_likelihood += live ? w[i] * lse[i] : 0.0f;
+            block_worst = std::min(block_worst, lse[i]);
+        }
+        log_likelihood += double(block_likelihood);
+        if (block_worst < worst_log) {  // rare after the first blocks: find which sample it was
+            worst_log = block_worst;
+            worst_sample = begin + size_t(std::find(lse, lse + n, block_worst) - lse);
         }
         for (size_t j = 0; j < J; ++j) {
             float weight = 0.0f, sx = 0.0f, sy = 0.0f, sz = 0.0f;
