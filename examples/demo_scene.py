@@ -252,19 +252,23 @@ def _read_exr(path):
     return px.reshape(h, w, 4)[..., :3].copy()
 
 
-def write_png(pixels, path, scene=None):
-    """Linear RGB (rows bottom first, as Blender stores them) -> PNG through the scene's view transform."""
+def save_pixels(pixels, path, scene=None):
+    """Linear RGB (rows bottom first, as Blender stores them) -> `path`: an .exr keeps the linear
+    values (float 32), a .png goes through the scene's view transform (8-bit). Image.save_render
+    does both; Image.save would write an EXR's floats sRGB-encoded even from a Linear image."""
     scene = scene or bpy.context.scene
     h, w = pixels.shape[:2]
-    image = bpy.data.images.new("ndfb-demo-png", w, h, alpha=False, float_buffer=True)
+    image = bpy.data.images.new("ndfb-demo-pixels", w, h, alpha=False, float_buffer=True)
     image.colorspace_settings.name = "Linear"  # new float images are tagged sRGB: saving would convert
+    exr = path.lower().endswith(".exr")
     try:
         rgba = np.ones((h, w, 4), dtype=np.float32)
         rgba[..., :3] = pixels
         image.pixels.foreach_set(rgba.ravel())
         settings = scene.render.image_settings
         old = (settings.file_format, settings.color_mode, settings.color_depth)
-        settings.file_format, settings.color_mode, settings.color_depth = "PNG", "RGB", "8"
+        settings.file_format, settings.color_mode = ("OPEN_EXR" if exr else "PNG"), "RGB"
+        settings.color_depth = "32" if exr else "8"
         try:
             image.save_render(path, scene=scene)
         finally:
@@ -351,7 +355,7 @@ def render_plain(scene, directory, materials, reference_samples=256, samples=16,
     finally:
         set_normal_interpolation(materials, previous)
     os.remove(big_path)  # the downsampled one is kept (written below)
-    _write_exr(images["eevee_reference"], os.path.join(directory, "eevee_reference.exr"), scene)
+    save_pixels(images["eevee_reference"], os.path.join(directory, "eevee_reference.exr"), scene)
     info["eevee_reference"] = {"factor": factor, "taa_samples": eevee_reference_samples,
                                "interpolation": "Closest"}
     timed("cycles_reference", lambda: render(scene, "CYCLES", os.path.join(directory, "cycles_reference.exr"),
@@ -370,21 +374,6 @@ def render_baked(scene, directory, samples=16, eevee_samples=64, log=print):
         seconds[name] = round(time.perf_counter() - start, 2)
         log("  rendered %-18s %dx%d in %.1f s" % (name, images[name].shape[1], images[name].shape[0], seconds[name]))
     return images, {"seconds": seconds}
-
-
-def _write_exr(pixels, path, scene):
-    h, w = pixels.shape[:2]
-    image = bpy.data.images.new("ndfb-demo-exr", w, h, alpha=False, float_buffer=True)
-    image.colorspace_settings.name = "Linear"  # else image.save() converts to sRGB (and clips)
-    try:
-        rgba = np.ones((h, w, 4), dtype=np.float32)
-        rgba[..., :3] = pixels
-        image.pixels.foreach_set(rgba.ravel())
-        image.filepath_raw = path
-        image.file_format = "OPEN_EXR"
-        image.save()
-    finally:
-        bpy.data.images.remove(image)
 
 
 # ---- regions --------------------------------------------------------------------------------------
@@ -500,7 +489,7 @@ def montage(rows, path, scene=None, gap=4):
             top = i * (h + gap)
             # Blender's rows start at the bottom: flip each image into top-first order and back.
             out[top:top + h, j * (w + gap):j * (w + gap) + w] = image[::-1]
-    return write_png(out[::-1], path, scene)
+    return save_pixels(out[::-1], path, scene)
 
 
 # ---- the demo -------------------------------------------------------------------------------------
@@ -552,7 +541,7 @@ def run_demo(out, width=320, height=180, reference_samples=256, samples=16, eeve
     info["seconds"].update(masks=round(mask_seconds, 2), bake=round(bake_seconds, 2))
 
     for name, pixels in images.items():
-        write_png(pixels, os.path.join(renders, name + ".png"), scene)
+        save_pixels(pixels, os.path.join(renders, name + ".png"), scene)
     montage([[images["eevee_reference"], images["eevee_naive"], images["eevee_ndfbake"]],
              [images["cycles_reference"], images["cycles_naive"], images["cycles_ndfbake"]]],
             os.path.join(out, "montage.png"), scene)

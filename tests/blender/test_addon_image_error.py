@@ -67,6 +67,11 @@ def test_image_error_against_references():
         images, info = demo_scene.render_plain(scene, renders, scene_info["materials"], REFERENCE_SAMPLES, SAMPLES,
                                                log=lambda s: print(s, flush=True))
         h.expect(info["eevee_reference"]["factor"] == 8, "EEVEE reference at %dx" % info["eevee_reference"]["factor"])
+        # The downsampled reference is written out, not rendered: the file must hold its linear values.
+        saved = demo_scene._read_exr(os.path.join(renders, "eevee_reference.exr"))
+        h.expect(np.allclose(saved, images["eevee_reference"], rtol=1e-5, atol=1e-6),
+                 "eevee_reference.exr differs from the reference it was written from (largest difference %g)"
+                 % float(np.abs(saved - images["eevee_reference"]).max()))
 
         bakes = demo_scene.bake_all(scene)
         for b in bakes:
