@@ -94,7 +94,7 @@ typedef struct ndfb_fit_options {
     ndfb_wrap wrap;
     int32_t align;                /* non-zero: aligned lobes (eq. 23) for hardware filtering, default 1 */
     float alignment_strength;     /* C of eq. 23, default 0.25 */
-    uint32_t max_iterations;      /* EM iterations per texel at most, default 10 */
+    uint32_t max_iterations;      /* EM iterations per texel at most, default 10 (hierarchical: at most 5 on binned levels) */
     ndfb_fit_method method;       /* default NDFB_FIT_HIERARCHICAL */
     uint32_t threads;             /* 0: all cores */
     ndfb_progress_fn progress;

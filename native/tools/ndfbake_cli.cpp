@@ -44,7 +44,8 @@ bake options:
   --method M           hierarchical (default: every level from the binned normals of the level
                        below) or per-level (every level from all its fine normals: Han's
                        reference, 2-5x slower)
-  --iterations N       EM iterations per texel at most (default 10)
+  --iterations N       EM iterations per texel at most (default 10; the hierarchical fit runs
+                       at most 5 on binned levels)
   --starts N           2 (default): EM from the finer level's lobes and from the farthest
                        samples, keeping the likelier; 1: from the finer level's lobes (Han 7.1)
   --no-align           fit texels independently (no lobe alignment across texels and levels)

@@ -59,7 +59,7 @@ MemoryEstimate estimate_bake_memory(int width, int height, const SourceLayout& s
         const uint64_t span = uint64_t(1) << l;
         const uint64_t footprint = std::min<uint64_t>(span, uint64_t(width)) * std::min<uint64_t>(span, uint64_t(height));
         const uint64_t busy = std::min<uint64_t>(threads, uint64_t(size.height));
-        const uint64_t bins = hierarchical && keeps_bins(l)
+        const uint64_t bins = hierarchical && binned_level(l)
             ? texels * (std::min<uint64_t>(footprint, kNormalBinCount) * sizeof(NormalBin) + sizeof(uint32_t))
             : 0;
         working = std::max(working, finer_bins + bins + footprint * busy * per_sample);

@@ -152,9 +152,13 @@ TexelFit fit_texel(std::span<const WeightedNormal> samples, std::span<const VmfL
     const bool budgeted = meter && settings.tolerance > 0.0f;
 
     TexelFit best;
-    best.lobes = {single_vmf_lobe(samples)};
-    if (budgeted) best.error = meter->error(best.lobes);
-    if (max_lobes == 1 || (budgeted && best.error <= settings.tolerance)) return best;
+    // Without a budget the single lobe is only the fallback where the samples hold one direction:
+    // computed when needed (level 1 has a million texels of four normals at 2048²).
+    if (max_lobes == 1 || budgeted) {
+        best.lobes = {single_vmf_lobe(samples)};
+        if (budgeted) best.error = meter->error(best.lobes);
+        if (max_lobes == 1 || (budgeted && best.error <= settings.tolerance)) return best;
+    }
 
     // The most lobes the samples support: each distinct sample when there are few, else EM.
     std::vector<VmfLobe> full = int(samples.size()) <= max_lobes
@@ -167,6 +171,7 @@ TexelFit fit_texel(std::span<const WeightedNormal> samples, std::span<const VmfL
             best.error = error;
         }
     }
+    if (best.lobes.empty()) best.lobes = {single_vmf_lobe(samples)};
     if (budgeted && best.lobes.size() > 2) merge_within_tolerance(best, settings.tolerance, *meter);
     if (meter && best.error < 0.0f) best.error = meter->error(best.lobes);
     return best;

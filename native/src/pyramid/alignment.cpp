@@ -61,7 +61,13 @@ void assign_slots(std::span<const VmfLobe> lobes, std::span<const VmfLobe> paren
     const int count = int(lobes.size());
     if (std::max(slots, count) > kMaxLobes)
         throw Error(Status::invalid_argument, "slot assignment takes at most " + std::to_string(kMaxLobes) + " lobes");
-    // On the stack: alignment visits every texel of every level.
+    // On the stack: alignment visits every texel of every level. Scores are computed once; the
+    // greedy rounds only look them up.
+    const int columns = std::max(slots, count);
+    std::array<std::array<float, kMaxLobes>, kMaxLobes> scores;
+    for (int i = 0; i < count; ++i)
+        for (int s = 0; s < columns; ++s)
+            scores[size_t(i)][size_t(s)] = s < slots ? slot_score(lobes[size_t(i)], s, parent, left) : -1e29f;
     std::array<bool, kMaxLobes> lobe_done{}, slot_used{};
     std::fill(slot_of_lobe.begin(), slot_of_lobe.end(), -1);
     for (int assigned = 0; assigned < count; ++assigned) {
@@ -69,9 +75,9 @@ void assign_slots(std::span<const VmfLobe> lobes, std::span<const VmfLobe> paren
         float best = -1e30f;
         for (int i = 0; i < count; ++i) {
             if (lobe_done[size_t(i)]) continue;
-            for (int s = 0; s < std::max(slots, count); ++s) {
+            for (int s = 0; s < columns; ++s) {
                 if (slot_used[size_t(s)]) continue;
-                const float score = s < slots ? slot_score(lobes[size_t(i)], s, parent, left) : -1e29f;
+                const float score = scores[size_t(i)][size_t(s)];
                 // Ties go to the heavier lobe and the lower slot: a deterministic order.
                 if (score > best + 1e-7f ||
                     (score >= best - 1e-7f && best_lobe >= 0 && lobes[size_t(i)].alpha > lobes[size_t(best_lobe)].alpha)) {

@@ -105,25 +105,32 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
     for (int l = 1; l < levels; ++l) {
         LobeLevel& level = pyramid.levels[size_t(l)];
         const LobeLevel& finer = pyramid.levels[size_t(l - 1)];
-        bins = hierarchical && keeps_bins(l) ? BinnedLevel(level.size) : BinnedLevel();
+        const bool binned = hierarchical && binned_level(l);
+        bins = binned ? BinnedLevel(level.size) : BinnedLevel();
+        TexelFitSettings fit_settings = settings.fit;
+        if (binned) fit_settings.em.max_iterations = std::min(fit_settings.em.max_iterations, kBinnedIterations);
+        // EM seeds from the children's lobes only where a texel has more samples than lobes.
+        const uint64_t span = uint64_t(1) << l;
+        const bool seeded = std::min<uint64_t>(span, uint64_t(map.width)) * std::min<uint64_t>(span, uint64_t(map.height)) >
+                            uint64_t(slots);
         parallel_rows(level.size.height, settings.threads, [&](int y) {
             std::vector<WeightedNormal> samples, scored;
             std::vector<VmfLobe> children, child(static_cast<size_t>(slots));
             std::optional<BinAccumulator> binner;
-            if (hierarchical) binner.emplace();
+            if (binned) binner.emplace();
             for (int x = 0; x < level.size.width; ++x) {
                 children.clear();
-                for (int cy = 2 * y; cy < std::min(2 * y + 2, finer.size.height); ++cy)
+                for (int cy = 2 * y; seeded && cy < std::min(2 * y + 2, finer.size.height); ++cy)
                     for (int cx = 2 * x; cx < std::min(2 * x + 2, finer.size.width); ++cx) {
                         pyramid.texel(l - 1, cx, cy, child);
                         for (const VmfLobe& lobe : child)
                             if (lobe.alpha > 0.0f) children.push_back(lobe);
                     }
                 // `scored`: the fine normals the budget scores candidates on, whichever samples EM fits.
-                if (hierarchical) {
+                if (binned) {
                     const bool summed = accumulate_texel_bins(map, finer_bins, l, x, y, settings.wrap, *binner, scored);
                     const std::span<const NormalBin> texel_bins = binner->finish();
-                    if (!bins.empty()) bins.append_texel(y, texel_bins);
+                    bins.append_texel(y, texel_bins);
                     bin_samples(texel_bins, samples);
                     if (budgeted && summed) gather_footprint(map, l, x, y, settings.wrap, scored);
                 } else {
@@ -134,9 +141,9 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
                 if (budgeted) {
                     subsample_footprint(scored, settings.budget_sample_cap);
                     const TexelErrorMeter meter(scored, settings.brdf, budget_directions);
-                    fit = fit_texel(samples, children, settings.fit, &meter);
+                    fit = fit_texel(samples, children, fit_settings, &meter);
                 } else {
-                    fit = fit_texel(samples, children, settings.fit, nullptr);
+                    fit = fit_texel(samples, children, fit_settings, nullptr);
                 }
                 store_texel(level, slots, x, y, std::move(fit.lobes), fit.error);
             }

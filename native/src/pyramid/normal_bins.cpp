@@ -72,7 +72,7 @@ std::span<const NormalBin> BinnedLevel::texel(int x, int y) const
     return std::span(row.bins).subspan(row.offsets[size_t(x)], row.offsets[size_t(x) + 1] - row.offsets[size_t(x)]);
 }
 
-bool keeps_bins(int level) { return level < 31 && (uint64_t(1) << (2 * level)) > uint64_t(kNormalBinCount); }
+bool binned_level(int level) { return level < 31 && (uint64_t(1) << (2 * level)) > uint64_t(kMinBinnedFootprint); }
 
 bool accumulate_texel_bins(const NormalMap& map, const BinnedLevel& finer, int level, int x, int y, WrapMode wrap,
                            BinAccumulator& bins, std::vector<WeightedNormal>& gathered)
