@@ -60,7 +60,7 @@ typedef enum ndfb_fit_method {
     NDFB_FIT_PER_LEVEL = 0,    /* every level from all the fine normals it covers (Han §7.1): the
                                   reference the default is measured against */
     NDFB_FIT_HIERARCHICAL = 1  /* every level from the binned normals of the level below (default):
-                                  as accurate, 2-5x faster (README, "Speed") */
+                                  as accurate, 2-3x faster (README, "Speed") */
 } ndfb_fit_method;
 typedef enum ndfb_representation {
     NDFB_REPR_VMF_MIXTURE = 0, /* the budgeted vMF mixture (what bake writes) */
