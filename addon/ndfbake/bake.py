@@ -416,9 +416,9 @@ def finish(job):
             group = nodes.build_material_group("NDFB " + material.name, principled, normal_map, texture, images,
                                                atlas, job.lod)
             targets.append({"principled": principled_name, "group_node": "", "node_group": group.name,
-                            "bypassed": []})
-            node, bypassed = nodes.insert_group_node(tree, group, principled, normal_map, texture)
-            targets[-1].update(group_node=node.name, bypassed=bypassed)
+                            "bypassed": [], "eevee_output": ""})
+            node, bypassed, eevee_output = nodes.insert_group_node(tree, group, principled, normal_map, texture)
+            targets[-1].update(group_node=node.name, bypassed=bypassed, eevee_output=eevee_output)
             if job.lod is not None and bpy.context.scene.camera is not None:
                 nodes.drive_lod_inputs(node, bpy.context.scene, bpy.context.scene.camera)
     except Exception as e:
@@ -508,7 +508,8 @@ def _remove_nodes(material, rec):
     used = []
     for target in rec.get("targets", []):
         bypassed = [tuple(b) for b in target.get("bypassed", [])]
-        group = nodes.remove_group_node(tree, target["group_node"], target["principled"], bypassed)
+        group = nodes.remove_group_node(tree, target["group_node"], target["principled"], bypassed,
+                                        target.get("eevee_output", ""))
         if group is not None:
             used.append(group.name)
         used.append(target.get("node_group", ""))

@@ -36,6 +36,11 @@ weights where filtering leaves Σα ≠ 1. Every other Principled input (linked 
 over through the group's inputs. A material whose fit needs one lobe gets a one-lobe group (no
 mix chain): the group is built for the lobe slots the bake wrote.
 
+The group has two shader outputs: BSDF, the lobes above (Cycles, and both engines where the
+material's graph is the user's), and EEVEE BSDF, the same lobes narrowed toward grazing views
+(grazing_roughness_group), which EEVEE draws through a Material Output of target EEVEE that the
+bake adds beside the user's (add_eevee_output) and Revert removes.
+
 OSL: Debian's Blender is built without OSL (bpy.app.build_options.cycles_osl is False), so no OSL
 Script variant is offered; `osl_status()` says so. The stock-node group works in both engines.
 """
@@ -48,12 +53,17 @@ from . import scene_lod
 GROUP_VERSION = 1
 TAG = "ndfbake"                       # ID/custom property marking what this add-on created
 LOBE_GROUP = "NDFB vMF Lobe v%d" % GROUP_VERSION
+GRAZING_GROUP = "NDFB Grazing Roughness v%d" % GROUP_VERSION
 LOD_GROUP = "NDFB Level of Detail v%d" % GROUP_VERSION
 TAPS_GROUP = "NDFB Atlas Taps v%d" % GROUP_VERSION
 BILINEAR_GROUP = "NDFB Bilinear v%d" % GROUP_VERSION
 LOD_INPUTS = ("Texels per Unit", "Pixel Angle", "Pixel Size")
+EEVEE_BSDF = "EEVEE BSDF"             # the group's second shader output (narrowed lobes)
 TAP_CORNERS = ("00", "10", "01", "11")  # x then y offset of a bilinear tap
 GGX_VMF_WIDENING = 1.5                # native/src/math/brdf.h kGgxVmfWidening
+# cos θ is floored here (θ ≈ 89.9°) so that tan²θ stays finite where a lobe faces away.
+GRAZING_MIN_COSINE = 1e-3
+EEVEE_OUTPUT = "ndfbake EEVEE Output"   # the Material Output (target EEVEE) a bake may add
 
 # Principled inputs the lobe group computes itself rather than passing through.
 COMPUTED_INPUTS = {"Normal", "Roughness"}
@@ -185,6 +195,51 @@ def lobe_group():
     tree.links.new(weight, gout.inputs["Weight"])
     tree.links.new(color, gout.inputs["Normal"])
     tree.links.new(roughness_out, gout.inputs["Roughness"])
+    return tree
+
+
+def grazing_roughness_group():
+    """EEVEE's roughness for a widened lobe: inputs Roughness (widened, α′ = Roughness²), Base
+    Roughness (the original's, α) and Normal (the lobe's, world space); output Roughness with
+
+        α″² = max(α′² / (1 + α′² tan²θ), α²),   θ between the view and the lobe's normal.
+
+    Why: a widened GGX lobe loses far more of its light at grazing views in EEVEE than the fine
+    normals' narrow lobes do (the far ground of the demo scene rendered 25% darker than its
+    supersampled reference). The narrowing grows with α′ tan θ, the quantity GGX's masking grows
+    with, and stops at the original roughness. Measured (EEVEE block error against the
+    supersampled reference, ratio to the naive map's; far ground / far spheres; demo 320×180 and
+    test 128×72): no narrowing 1.11 / 0.49 and 1.18 / 0.31; α′²(1 + α′² tan²θ)^(−p) with p = 1/3
+    0.40 / 0.48 and 0.55 / 0.34, p = 1/2 0.31 / 0.47 and 0.40 / 0.34, p = 1 (this) 0.25 / 0.44 and
+    0.29 / 0.33, with the far ground's mean luminance 2.11 against the reference's 2.16 (p = 2
+    overshoots it: 2.21). Cycles keeps the widened lobes: there narrowed sun glints at grazing
+    views came out as fireflies at 16 samples per pixel (README, open problems)."""
+    tree = _find_group(GRAZING_GROUP)
+    if tree is not None:
+        return tree
+    tree, gin, gout = _group_with_io(
+        GRAZING_GROUP, [("NodeSocketFloatFactor", "Roughness"), ("NodeSocketFloatFactor", "Base Roughness"),
+                        (VECTOR, "Normal")], [(FLOAT, "Roughness")], (-1000, 900))
+    geometry = tree.nodes.new("ShaderNodeNewGeometry")
+    geometry.location = (-1000, -300)
+    cosine = _math(tree, "MAXIMUM", _vmath(tree, "DOT_PRODUCT", geometry.outputs["Incoming"], gin.outputs["Normal"],
+                                           location=(-800, -300), output=1),
+                   GRAZING_MIN_COSINE, location=(-650, -300))
+    cos2 = _math(tree, "MULTIPLY", cosine, cosine, location=(-500, -300))
+    tan2 = _math(tree, "DIVIDE", _math(tree, "SUBTRACT", 1.0, cos2, location=(-350, -200)), cos2,
+                 location=(-200, -300))
+
+    def alpha2(roughness, y):  # α² = roughness⁴
+        r2 = _math(tree, "MULTIPLY", roughness, roughness, location=(-800, y))
+        return _math(tree, "MULTIPLY", r2, r2, location=(-650, y))
+
+    widened2 = alpha2(gin.outputs["Roughness"], 200)
+    base2 = alpha2(gin.outputs["Base Roughness"], 0)
+    stretch = _math(tree, "MULTIPLY_ADD", widened2, tan2, 1.0, location=(100, 100))
+    narrowed2 = _math(tree, "MAXIMUM", _math(tree, "DIVIDE", widened2, stretch, location=(250, 150)), base2,
+                      location=(400, 100))
+    tree.links.new(_math(tree, "SQRT", _math(tree, "SQRT", narrowed2, location=(550, 100)), location=(700, 100)),
+                   gout.inputs["Roughness"])
     return tree
 
 
@@ -462,6 +517,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         for key, value in zip(LOD_INPUTS, (lod.texels_per_unit, lod.pixel_angle, lod.pixel_size)):
             _add_socket(tree, "INPUT", "NodeSocketFloat", key).default_value = value
     _add_socket(tree, "OUTPUT", "NodeSocketShader", "BSDF")
+    _add_socket(tree, "OUTPUT", "NodeSocketShader", EEVEE_BSDF)
 
     gin = tree.nodes.new("NodeGroupInput")
     gin.location = (-2300, 0)
@@ -473,7 +529,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         uv = _uv_source(tree, gin, has_vector, (-2000, 100))
         taps, blend = _atlas_levels(tree, gin, tree.name, atlas, image_texture.extension == "REPEAT", uv)
 
-    bsdfs, weights = [], []
+    shaders, weights = {"BSDF": [], EEVEE_BSDF: []}, []
     for j, image in enumerate(lobe_images):
         y = -900 * j
         if atlas is not None:
@@ -497,37 +553,72 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         tree.links.new(dec.outputs["Normal"], nm.inputs["Color"])
         tree.links.new(gin.outputs["Normal Strength"], nm.inputs["Strength"])
 
-        bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
-        bsdf.name = bsdf.label = "Lobe %d BSDF" % j
-        # Multiple scattering: a widened GGX lobe loses the energy of light scattered more than
-        # once between its microfacets, which the fine normals it stands for, each as narrow as
-        # the original, hardly lose (white furnace, roughness 0.15: 0.81-0.86 of the reference
-        # with GGX lobes, 0.88-0.98 with Multiscatter GGX). Same as GGX for narrow lobes.
-        bsdf.distribution = "MULTI_GGX" if principled.distribution == "GGX" else principled.distribution
-        bsdf.subsurface_method = principled.subsurface_method
-        bsdf.location = (0, y)
-        for socket in carried:
-            if socket.name in COMPUTED_INPUTS:
-                continue
-            tree.links.new(gin.outputs[socket.name], bsdf.inputs[socket.identifier])
-        tree.links.new(dec.outputs["Roughness"], bsdf.inputs["Roughness"])
-        tree.links.new(nm.outputs["Normal"], bsdf.inputs["Normal"])
-        bsdfs.append(bsdf.outputs["BSDF"])
+        grazing = tree.nodes.new("ShaderNodeGroup")
+        grazing.node_tree = grazing_roughness_group()
+        grazing.name = grazing.label = "Grazing %d" % j
+        grazing.location = (-300, y - 450)
+        tree.links.new(dec.outputs["Roughness"], grazing.inputs["Roughness"])
+        if "Roughness" in names:
+            tree.links.new(gin.outputs["Roughness"], grazing.inputs["Base Roughness"])
+        else:
+            grazing.inputs["Base Roughness"].default_value = dec.inputs["Roughness"].default_value
+        tree.links.new(nm.outputs["Normal"], grazing.inputs["Normal"])
+
+        for output, roughness, dy in (("BSDF", dec.outputs["Roughness"], 0),
+                                      (EEVEE_BSDF, grazing.outputs["Roughness"], -450)):
+            bsdf_name = "Lobe %d BSDF" % j if output == "BSDF" else "Lobe %d EEVEE BSDF" % j
+            bsdf = _lobe_bsdf(tree, gin, principled, carried, roughness, nm.outputs["Normal"], bsdf_name,
+                              (0, y + dy))
+            shaders[output].append(bsdf.outputs["BSDF"])
         weights.append(dec.outputs["Weight"])
 
-    # Σ_j α_j·BSDF_j / Σ_j α_j as a chain of mixes: factor α_k / (α_0 + … + α_k).
-    shader, total = bsdfs[0], weights[0]
-    for k in range(1, count):
+    factors = _mix_factors(tree, weights)
+    for output, y in (("BSDF", -200), (EEVEE_BSDF, -500)):
+        tree.links.new(_mix_chain(tree, shaders[output], factors, y), gout.inputs[output])
+    return tree
+
+
+def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location):
+    """A copy of the original Principled BSDF with the lobe's normal and roughness."""
+    bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
+    bsdf.name = bsdf.label = name
+    # Multiple scattering: a widened GGX lobe loses the energy of light scattered more than
+    # once between its microfacets, which the fine normals it stands for, each as narrow as
+    # the original, hardly lose (white furnace, roughness 0.15: 0.81-0.86 of the reference
+    # with GGX lobes, 0.88-0.98 with Multiscatter GGX). Same as GGX for narrow lobes.
+    bsdf.distribution = "MULTI_GGX" if principled.distribution == "GGX" else principled.distribution
+    bsdf.subsurface_method = principled.subsurface_method
+    bsdf.location = location
+    for socket in carried:
+        if socket.name in COMPUTED_INPUTS:
+            continue
+        tree.links.new(gin.outputs[socket.name], bsdf.inputs[socket.identifier])
+    tree.links.new(roughness, bsdf.inputs["Roughness"])
+    tree.links.new(normal, bsdf.inputs["Normal"])
+    return bsdf
+
+
+def _mix_factors(tree, weights):
+    """Σ_j α_j·BSDF_j / Σ_j α_j as a chain of mixes takes, at step k ≥ 1, the factor
+    α_k / (α_0 + … + α_k); this also renormalizes the weights where filtering leaves Σα ≠ 1."""
+    factors, total = [], weights[0]
+    for k in range(1, len(weights)):
         x = 400 + 200 * k
         total = _math(tree, "ADD", total, weights[k], location=(x, 300))
+        factors.append(_math(tree, "DIVIDE", weights[k], total, location=(x, 150)))
+    return factors
+
+
+def _mix_chain(tree, shaders, factors, y):
+    shader = shaders[0]
+    for k in range(1, len(shaders)):
         mix = tree.nodes.new("ShaderNodeMixShader")
-        mix.location = (x, -200)
-        tree.links.new(_math(tree, "DIVIDE", weights[k], total, location=(x, 150)), mix.inputs["Fac"])
+        mix.location = (400 + 200 * k, y)
+        tree.links.new(factors[k - 1], mix.inputs["Fac"])
         tree.links.new(shader, mix.inputs[1])
-        tree.links.new(bsdfs[k], mix.inputs[2])
+        tree.links.new(shaders[k], mix.inputs[2])
         shader = mix.outputs["Shader"]
-    tree.links.new(shader, gout.inputs["BSDF"])
-    return tree
+    return shader
 
 
 def drive_lod_inputs(node, scene, camera_object):
@@ -568,16 +659,49 @@ def _remove_drivers(material_tree, node_name):
 
 def insert_group_node(material_tree, group_tree, principled, normal_map, image_texture):
     """Adds the group node beside `principled`, feeds it the Principled's inputs, and bypasses the
-    Principled BSDF: every link leaving its BSDF output now leaves the group's. Returns the node and
-    the bypassed links as (to_node, to_socket identifier, muted) for revert."""
+    Principled BSDF: every link leaving its BSDF output now leaves the group's BSDF output. Where
+    the Principled fed the material's only output (target All) directly, a Material Output with
+    target EEVEE gets the group's EEVEE BSDF (see add_eevee_output). Returns the node, the bypassed
+    links as (to_node, to_socket identifier, muted), and the added output's name ("" if none), for
+    revert."""
     node = material_tree.nodes.new("ShaderNodeGroup")
-    bypassed = []
+    bypassed, added = [], []
     try:
-        return node, _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture,
-                                      bypassed)
+        _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture, bypassed)
+        added.append(add_eevee_output(material_tree, node, bypassed))
+        return node, bypassed, added[0]
     except Exception:
-        remove_group_node(material_tree, node.name, principled.name, bypassed)
+        remove_group_node(material_tree, node.name, principled.name, bypassed, added[0] if added else "")
         raise
+
+
+def add_eevee_output(material_tree, node, bypassed):
+    """EEVEE draws the group's EEVEE BSDF (lobes narrowed at grazing views) through a Material
+    Output of target EEVEE, which Blender prefers to a target-All output for EEVEE and its viewport;
+    Cycles goes on drawing the All output, fed by the group's BSDF. Added only where that output is
+    the Principled's one destination and the material has no EEVEE output yet: elsewhere (shader
+    mixes, outputs per engine the user made) the graph downstream is the user's, and both engines
+    draw the widened lobes. Returns the new node's name, or ""."""
+    nodes = material_tree.nodes
+    if len(bypassed) != 1 or any(n.bl_idname == "ShaderNodeOutputMaterial" and n.target == "EEVEE" for n in nodes):
+        return ""
+    output = nodes.get(bypassed[0][0])
+    if output is None or output.bl_idname != "ShaderNodeOutputMaterial" or output.target != "ALL" \
+            or bypassed[0][1] != "Surface":
+        return ""
+    eevee = nodes.new("ShaderNodeOutputMaterial")
+    eevee.name = eevee.label = EEVEE_OUTPUT
+    eevee[TAG] = GROUP_VERSION
+    eevee.target = "EEVEE"
+    eevee.parent = output.parent
+    eevee.location = (output.location.x, output.location.y - 220)
+    new = material_tree.links.new(node.outputs[EEVEE_BSDF], eevee.inputs["Surface"])
+    new.is_muted = bypassed[0][2]
+    for socket in output.inputs:  # Volume and Displacement go on as the user wired them
+        if socket.identifier != "Surface" and socket.is_linked:
+            link = socket.links[0]
+            material_tree.links.new(link.from_socket, eevee.inputs[socket.identifier]).is_muted = link.is_muted
+    return eevee.name
 
 
 def _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture, bypassed):
@@ -612,7 +736,6 @@ def _wire_group_node(material_tree, node, group_tree, principled, normal_map, im
         links.remove(link)
         new = links.new(node.outputs["BSDF"], to_socket)
         new.is_muted = muted
-    return bypassed
 
 
 def _socket_by_identifier(sockets, identifier):
@@ -622,10 +745,13 @@ def _socket_by_identifier(sockets, identifier):
     return None
 
 
-def remove_group_node(material_tree, node_name, principled_name, bypassed):
+def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee_output=""):
     """Undoes insert_group_node: the bypassed links leave the Principled BSDF again, and the group
-    node goes. Returns the group tree it used (or None)."""
+    node and the EEVEE output it added go. Returns the group tree it used (or None)."""
     nodes = material_tree.nodes
+    added = nodes.get(eevee_output) if eevee_output else None
+    if added is not None and added.get(TAG) is not None:
+        nodes.remove(added)
     node = nodes.get(node_name)
     principled = nodes.get(principled_name)
     group_tree = node.node_tree if node is not None else None
@@ -658,7 +784,7 @@ def remove_unused_groups(names):
     ordered = []
     for name in dict.fromkeys(names):
         ordered += [name, name + " atlas"]  # the material's group, then its atlas table
-    for name in ordered + [LOBE_GROUP, LOD_GROUP, TAPS_GROUP, BILINEAR_GROUP]:
+    for name in ordered + [LOBE_GROUP, GRAZING_GROUP, LOD_GROUP, TAPS_GROUP, BILINEAR_GROUP]:
         tree = bpy.data.node_groups.get(name)
         if tree is not None and tree.get(TAG) is not None and tree.users == 0:
             bpy.data.node_groups.remove(tree)

@@ -14,6 +14,7 @@ saved as a .blend in a temporary folder.
   what the scene renders; linked Principled inputs are carried over; packing works.
 """
 import os
+import re
 import sys
 
 import bpy
@@ -26,12 +27,14 @@ def _group_nodes(material):
     return [n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeGroup" and n.get("ndfbake")]
 
 
-def _principled_count(tree):
-    return sum(1 for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+def _principled_count(tree, output="BSDF"):
+    """The lobe BSDFs feeding the group's `output` ("BSDF" or nodes.EEVEE_BSDF)."""
+    pattern = r"Lobe \d+ BSDF" if output == "BSDF" else r"Lobe \d+ EEVEE BSDF"
+    return sum(1 for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled" and re.fullmatch(pattern, n.name))
 
 
 def test_bake_adds_only_the_group_and_bypass():
-    from ndfbake import bake
+    from ndfbake import bake, nodes
     directory = h.temp_dir()
     try:
         material = h.baked_scene(directory)
@@ -41,7 +44,7 @@ def test_bake_adds_only_the_group_and_bypass():
         after = h.dump_material(material)
 
         added = set(after["nodes"]) - set(before["nodes"])
-        h.expect(added == {"ndfbake"}, "added nodes: %s" % added)
+        h.expect(added == {"ndfbake", nodes.EEVEE_OUTPUT}, "added nodes: %s" % added)
         h.expect(set(before["nodes"]) <= set(after["nodes"]), "a node went away")
         for name, node in before["nodes"].items():
             if name == "Principled BSDF":
@@ -53,8 +56,19 @@ def test_bake_adds_only_the_group_and_bypass():
         added_links = set(after["links"]) - set(before["links"])
         h.expect(removed_links == {("Principled BSDF", "BSDF", "Material Output", "Surface", False, True)},
                  "removed links: %s" % removed_links)
-        h.expect(all("ndfbake" in (l[0], l[2]) for l in added_links), "added links not at the group: %s" % added_links)
-        h.expect(any(l[0] == "ndfbake" and l[2] == "Material Output" for l in added_links), "group not at the output")
+        h.expect(all("ndfbake" in (l[0], l[2]) or l[2] == nodes.EEVEE_OUTPUT for l in added_links),
+                 "added links not at the group or its EEVEE output: %s" % added_links)
+        group_node = material.node_tree.nodes["ndfbake"]
+        h.expect([l.to_node.name for l in group_node.outputs["BSDF"].links] == ["Material Output"],
+                 "group not at the output")
+        h.expect([l.to_node.name for l in group_node.outputs[nodes.EEVEE_BSDF].links] == [nodes.EEVEE_OUTPUT],
+                 "the group's EEVEE BSDF does not reach the EEVEE output")
+        eevee_output = material.node_tree.nodes[nodes.EEVEE_OUTPUT]
+        h.expect(eevee_output.target == "EEVEE" and material.node_tree.nodes["Material Output"].target == "ALL",
+                 "output targets: %s, %s" % (eevee_output.target, material.node_tree.nodes["Material Output"].target))
+        h.expect(material.node_tree.get_output_node("EEVEE") == eevee_output
+                 and material.node_tree.get_output_node("CYCLES") == material.node_tree.nodes["Material Output"],
+                 "EEVEE must draw the EEVEE output, Cycles the user's")
 
         folder = os.path.join(directory, "Bumpy.ndfbake")
         files = sorted(os.listdir(folder))
@@ -62,7 +76,8 @@ def test_bake_adds_only_the_group_and_bypass():
         h.expect(not any(f.startswith(".") for f in files), "staging left behind: %s" % files)
         h.expect(result.lobes == len([f for f in files if f.startswith("level00_lobe")]), "lobe count")
         group = _group_nodes(material)[0].node_tree
-        h.expect(_principled_count(group) == result.lobes, "one BSDF per lobe")
+        h.expect(_principled_count(group) == result.lobes == _principled_count(group, nodes.EEVEE_BSDF),
+                 "one BSDF per lobe and output")
         for j in range(result.lobes):
             image = bpy.data.images["Bumpy lobe %d" % j]
             h.expect(image.filepath == "//Bumpy.ndfbake/level00_lobe%d.exr" % j, "path %s" % image.filepath)

@@ -5,8 +5,8 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 The scene is examples/demo_scene.py's (a receding metal ground plane and four metal spheres, five
 normal maps synthesized by the library, the sunset HDR), built at 128x72:
 
-- test_image_error_against_references, the issue's acceptance (printed; not met yet, so
-  asserted as regression bounds, see REGRESSION_BOUNDS). EEVEE: the reference is the
+- test_image_error_against_references, the issue's acceptance (printed; asserted where met, as
+  regression bounds elsewhere, see REGRESSION_BOUNDS). EEVEE: the reference is the
   same scene rendered by EEVEE at 8x8 the resolution with the normal maps point-sampled ('Closest',
   no MIP-mapping), box-downsampled; the figure is the RMS over 4x4-pixel windows of the difference
   in mean luminance (examples/image_error.py). Cycles: the reference has 512 samples per pixel of
@@ -41,12 +41,12 @@ REFERENCE_SAMPLES = 512
 SAMPLES = 16
 ACCEPTED_RATIO = 0.5                      # the issue: ndfbake's error at most half the naive map's
 REGIONS = ("ground_far", "spheres_far")   # where filtering matters; "all", "ground_near" printed too
-# The issue's 0.5 is met on the far spheres in EEVEE only (README, "Image error"): on the ground,
-# seen at grazing angles, widened GGX lobes mask light the fine normals do not, so ndfbake renders
-# it darker than the reference. Until that is fixed, the test holds the figures measured on
-# 2026-11-21 (128x72) as regression bounds, with a margin for sampling noise, and prints the
-# acceptance verdict beside them.
-REGRESSION_BOUNDS = {("eevee", "ground_far"): 1.35, ("eevee", "spheres_far"): ACCEPTED_RATIO,
+# The issue's 0.5 is met in EEVEE (its lobes narrowed at grazing views, nodes.grazing_roughness_group:
+# 0.29 on the far ground, 0.33 on the far spheres at 128x72) and asserted. Cycles does not meet it
+# (README, "Image error": at 16 samples per pixel its noise alone is about the target on the far
+# spheres); the test holds the figures measured on 2026-11-21 (128x72) as regression bounds, with
+# a margin for sampling noise, and prints the acceptance verdict beside them.
+REGRESSION_BOUNDS = {("eevee", "ground_far"): ACCEPTED_RATIO, ("eevee", "spheres_far"): ACCEPTED_RATIO,
                      ("cycles", "ground_far"): 1.0, ("cycles", "spheres_far"): 1.5,
                      ("cycles", "all"): 0.8, ("cycles", "ground_near"): 0.5}
 MIN_WINDOWS = 40                          # 4x4 windows a region needs for its figure to mean anything

@@ -1,4 +1,5 @@
-"""The lobe node group computes what native/src/math/brdf.h says, in Cycles and in EEVEE.
+"""The lobe node group computes what native/src/math/brdf.h says, in Cycles and in EEVEE, and the
+grazing-roughness group (EEVEE's narrowed lobes) what nodes.py's formula says.
 
 Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_nodes.py -- LIB
 
@@ -165,6 +166,62 @@ def test_decode_group_matches_the_rule_in_both_engines():
         h.cleanup(directory)
 
 
+GRAZING_ROUGHNESS = (0.3, 0.5, 0.7, 0.9)       # widened roughness, one column each
+GRAZING_TILT_DEG = (0.0, 45.0, 75.0, 89.0)      # the lobe normal's angle from the view, one row each
+GRAZING_BASE = 0.25
+
+
+def grazing_reference(roughness, tilt_deg, base):
+    """α″² = max(α′² / (1 + α′² tan²θ), α²), from nodes.grazing_roughness_group's docstring."""
+    widened2, base2 = roughness ** 4, base ** 4
+    c = max(np.cos(np.radians(tilt_deg)), 1e-3)
+    tan2 = (1.0 - c * c) / (c * c)
+    return max(widened2 / (1.0 + widened2 * tan2), base2) ** 0.25
+
+
+def test_grazing_group_matches_its_formula_in_both_engines():
+    """A grid of planes under an orthographic camera looking down (the view direction is +Z at
+    every pixel), each showing as emission the group's output for one widened roughness and one
+    constant lobe normal tilted from the view."""
+    from ndfbake import nodes
+    directory = h.temp_dir()
+    try:
+        h.reset_scene()
+        scene = bpy.context.scene
+        for column, roughness in enumerate(GRAZING_ROUGHNESS):
+            for row, tilt in enumerate(GRAZING_TILT_DEG):
+                material = bpy.data.materials.new("grazing %d %d" % (column, row))
+                material.use_nodes = True
+                tree = material.node_tree
+                tree.nodes.remove(tree.nodes["Principled BSDF"])
+                group = tree.nodes.new("ShaderNodeGroup")
+                group.node_tree = nodes.grazing_roughness_group()
+                group.inputs["Roughness"].default_value = roughness
+                group.inputs["Base Roughness"].default_value = GRAZING_BASE
+                group.inputs["Normal"].default_value = (np.sin(np.radians(tilt)), 0.0, np.cos(np.radians(tilt)))
+                emission = tree.nodes.new("ShaderNodeEmission")
+                tree.links.new(group.outputs["Roughness"], emission.inputs["Strength"])
+                tree.links.new(emission.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+                bpy.ops.mesh.primitive_plane_add(size=2.0, location=(2.0 * column, -2.0 * row, 0.0))
+                bpy.context.active_object.data.materials.append(material)
+        bpy.ops.object.camera_add(location=(3.0, -3.0, 5.0), rotation=(0.0, 0.0, 0.0))
+        scene.camera = bpy.context.active_object
+        scene.camera.data.type = "ORTHO"
+        scene.camera.data.ortho_scale = 8.0
+        want = np.array([[grazing_reference(r, t, GRAZING_BASE) for r in GRAZING_ROUGHNESS]
+                         for t in GRAZING_TILT_DEG])
+        h.expect(float(np.abs(want - np.array(GRAZING_ROUGHNESS)[None, :]).max()) > 0.3,
+                 "the grid does not exercise the narrowing")
+        for engine in ("CYCLES", "BLENDER_EEVEE"):
+            got = render(scene, engine, os.path.join(directory, engine + ".exr"), 64, 64)[::-1]  # rows from the top
+            centres = got[8::16, 8::16, 0]  # each plane covers 16 x 16 pixels
+            worst = float(np.abs(centres - want).max())
+            h.expect(worst < 2e-3, "%s: grazing roughness off by %.4g\n%s\n%s" % (engine, worst, centres, want))
+            print("%s: grazing roughness matches its formula (max error %.1e)" % (engine, worst))
+    finally:
+        h.cleanup(directory)
+
+
 if __name__ == "__main__":
     h.import_addon()
-    h.run([test_decode_group_matches_the_rule_in_both_engines])
+    h.run([test_decode_group_matches_the_rule_in_both_engines, test_grazing_group_matches_its_formula_in_both_engines])
