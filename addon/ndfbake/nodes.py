@@ -566,9 +566,8 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
 
         for output, roughness, dy in (("BSDF", dec.outputs["Roughness"], 0),
                                       (EEVEE_BSDF, grazing.outputs["Roughness"], -450)):
-            bsdf_name = "Lobe %d BSDF" % j if output == "BSDF" else "Lobe %d EEVEE BSDF" % j
-            bsdf = _lobe_bsdf(tree, gin, principled, carried, roughness, nm.outputs["Normal"], bsdf_name,
-                              (0, y + dy))
+            bsdf = _lobe_bsdf(tree, gin, principled, carried, roughness, nm.outputs["Normal"],
+                              "Lobe %d %s" % (j, output), (0, y + dy))
             shaders[output].append(bsdf.outputs["BSDF"])
         weights.append(dec.outputs["Weight"])
 
@@ -665,13 +664,12 @@ def insert_group_node(material_tree, group_tree, principled, normal_map, image_t
     links as (to_node, to_socket identifier, muted), and the added output's name ("" if none), for
     revert."""
     node = material_tree.nodes.new("ShaderNodeGroup")
-    bypassed, added = [], []
+    bypassed = []
     try:
         _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture, bypassed)
-        added.append(add_eevee_output(material_tree, node, bypassed))
-        return node, bypassed, added[0]
+        return node, bypassed, add_eevee_output(material_tree, node, bypassed)
     except Exception:
-        remove_group_node(material_tree, node.name, principled.name, bypassed, added[0] if added else "")
+        remove_group_node(material_tree, node.name, principled.name, bypassed)
         raise
 
 
@@ -679,28 +677,33 @@ def add_eevee_output(material_tree, node, bypassed):
     """EEVEE draws the group's EEVEE BSDF (lobes narrowed at grazing views) through a Material
     Output of target EEVEE, which Blender prefers to a target-All output for EEVEE and its viewport;
     Cycles goes on drawing the All output, fed by the group's BSDF. Added only where that output is
-    the Principled's one destination and the material has no EEVEE output yet: elsewhere (shader
-    mixes, outputs per engine the user made) the graph downstream is the user's, and both engines
-    draw the widened lobes. Returns the new node's name, or ""."""
+    the Principled's one destination, it is the active one, and the material has no EEVEE output
+    yet: elsewhere (shader mixes, outputs per engine the user made) the graph downstream is the
+    user's, and both engines draw the widened lobes. Returns the new node's name, or ""; on an
+    error, removes what it added."""
     nodes = material_tree.nodes
     if len(bypassed) != 1 or any(n.bl_idname == "ShaderNodeOutputMaterial" and n.target == "EEVEE" for n in nodes):
         return ""
     output = nodes.get(bypassed[0][0])
     if output is None or output.bl_idname != "ShaderNodeOutputMaterial" or output.target != "ALL" \
-            or bypassed[0][1] != "Surface":
+            or not output.is_active_output or bypassed[0][1] != "Surface":
         return ""
     eevee = nodes.new("ShaderNodeOutputMaterial")
-    eevee.name = eevee.label = EEVEE_OUTPUT
-    eevee[TAG] = GROUP_VERSION
-    eevee.target = "EEVEE"
-    eevee.parent = output.parent
-    eevee.location = (output.location.x, output.location.y - 220)
-    new = material_tree.links.new(node.outputs[EEVEE_BSDF], eevee.inputs["Surface"])
-    new.is_muted = bypassed[0][2]
-    for socket in output.inputs:  # Volume and Displacement go on as the user wired them
-        if socket.identifier != "Surface" and socket.is_linked:
-            link = socket.links[0]
-            material_tree.links.new(link.from_socket, eevee.inputs[socket.identifier]).is_muted = link.is_muted
+    try:
+        eevee.name = eevee.label = EEVEE_OUTPUT
+        eevee[TAG] = GROUP_VERSION
+        eevee.target = "EEVEE"
+        eevee.parent = output.parent
+        eevee.location = (output.location.x, output.location.y - 220)
+        new = material_tree.links.new(node.outputs[EEVEE_BSDF], eevee.inputs["Surface"])
+        new.is_muted = bypassed[0][2]
+        for socket in output.inputs:  # Volume and Displacement go on as the user wired them
+            if socket.identifier != "Surface" and socket.is_linked:
+                link = socket.links[0]
+                material_tree.links.new(link.from_socket, eevee.inputs[socket.identifier]).is_muted = link.is_muted
+    except Exception:
+        nodes.remove(eevee)
+        raise
     return eevee.name
 
 

@@ -235,6 +235,38 @@ def test_linked_inputs_are_carried_and_restored():
         h.cleanup(directory)
 
 
+def test_a_user_graph_downstream_gets_no_eevee_output():
+    """The Principled feeds a Mix Shader, not the output: the graph after it is the user's, so the
+    bake adds no EEVEE output (both engines draw the group's BSDF through the user's mix), and a
+    displacement on the output stays where it is; Revert restores everything."""
+    from ndfbake import bake, nodes
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory, metallic=1.0)
+        tree = material.node_tree
+        output = tree.nodes["Material Output"]
+        mix = tree.nodes.new("ShaderNodeMixShader")
+        mix.inputs["Fac"].default_value = 0.25
+        tree.links.new(tree.nodes["Principled BSDF"].outputs["BSDF"], mix.inputs[1])
+        tree.links.new(tree.nodes.new("ShaderNodeBsdfDiffuse").outputs[0], mix.inputs[2])
+        tree.links.new(mix.outputs[0], output.inputs["Surface"])
+        tree.links.new(tree.nodes.new("ShaderNodeDisplacement").outputs[0], output.inputs["Displacement"])
+        bpy.ops.wm.save_mainfile()
+        before = h.dump_material(material)
+
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        group_node = _group_nodes(material)[0]
+        h.expect(nodes.EEVEE_OUTPUT not in tree.nodes, "an EEVEE output was added behind the user's mix")
+        h.expect([l.to_node for l in group_node.outputs["BSDF"].links] == [mix], "the group does not feed the mix")
+        h.expect(not group_node.outputs[nodes.EEVEE_BSDF].is_linked, "the EEVEE BSDF is wired somewhere")
+        h.expect(tree.get_output_node("EEVEE") == output, "EEVEE no longer draws the user's output")
+        bake.revert(material)
+        h.expect(h.dump_material(material) == before, "material differs after revert: %s"
+                 % h.differences(before, h.dump_material(material)))
+    finally:
+        h.cleanup(directory)
+
+
 def material_record(material):
     from ndfbake import material_scan
     return material_scan.record(material)
@@ -283,6 +315,7 @@ def test_failure_while_building_nodes_rolls_back():
 
 if __name__ == "__main__":
     h.import_addon()
-    h.run([test_bake_adds_only_the_group_and_bypass, test_failure_while_building_nodes_rolls_back, test_operators_rebake_fewer_lobes_and_revert,
-           test_save_reopen_then_revert, test_bake_all_bakes_what_the_scene_renders,
-           test_linked_inputs_are_carried_and_restored, test_pack_option])
+    h.run([test_bake_adds_only_the_group_and_bypass, test_failure_while_building_nodes_rolls_back,
+           test_operators_rebake_fewer_lobes_and_revert, test_save_reopen_then_revert,
+           test_bake_all_bakes_what_the_scene_renders, test_linked_inputs_are_carried_and_restored,
+           test_a_user_graph_downstream_gets_no_eevee_output, test_pack_option])
