@@ -56,8 +56,7 @@ MemoryEstimate estimate_bake_memory(int width, int height, const SourceLayout& s
         pyramid += texels * sizeof(float);
         if (l == 0) continue;
         pyramid += texels * slots * sizeof(VmfLobe);
-        const uint64_t span = uint64_t(1) << l;
-        const uint64_t footprint = std::min<uint64_t>(span, uint64_t(width)) * std::min<uint64_t>(span, uint64_t(height));
+        const uint64_t footprint = largest_footprint(width, height, l);
         const uint64_t busy = std::min<uint64_t>(threads, uint64_t(size.height));
         const uint64_t bins = hierarchical && binned_level(l)
             ? texels * (std::min<uint64_t>(footprint, kNormalBinCount) * sizeof(NormalBin) + sizeof(uint32_t))

@@ -65,6 +65,12 @@ void gather_footprint(const NormalMap& map, int level, int x, int y, WrapMode wr
             out.push_back({map.at(column.index, row.index), float(row.multiplicity * column.multiplicity)});
 }
 
+uint64_t largest_footprint(int width, int height, int level)
+{
+    const uint64_t span = uint64_t(1) << std::min(level, 62);
+    return std::min<uint64_t>(span, uint64_t(width)) * std::min<uint64_t>(span, uint64_t(height));
+}
+
 double footprint_weight(int width, int height, int level, int x, int y, WrapMode wrap)
 {
     const int64_t span = int64_t(1) << level;

@@ -1,6 +1,7 @@
 // MIP levels and the fine texels each coarse texel covers, for any size and both edge modes.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "ndf/weighted_normal.h"
@@ -30,6 +31,9 @@ LevelSize level_size(int width, int height, int level);
 // covers each fine texel as many times as it repeats (as weight, not as copies).
 void gather_footprint(const NormalMap& map, int level, int x, int y, WrapMode wrap,
                       std::vector<WeightedNormal>& out);
+
+// The most distinct fine texels one texel of `level` covers: min(2^L, w) × min(2^L, h).
+uint64_t largest_footprint(int width, int height, int level);
 
 // Σ of the weights gather_footprint would return for texel (x, y), without gathering.
 double footprint_weight(int width, int height, int level, int x, int y, WrapMode wrap);

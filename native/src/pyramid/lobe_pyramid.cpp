@@ -110,9 +110,7 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
         TexelFitSettings fit_settings = settings.fit;
         if (binned) fit_settings.em.max_iterations = std::min(fit_settings.em.max_iterations, kBinnedIterations);
         // EM seeds from the children's lobes only where a texel has more samples than lobes.
-        const uint64_t span = uint64_t(1) << l;
-        const bool seeded = std::min<uint64_t>(span, uint64_t(map.width)) * std::min<uint64_t>(span, uint64_t(map.height)) >
-                            uint64_t(slots);
+        const bool seeded = largest_footprint(map.width, map.height, l) > uint64_t(slots);
         parallel_rows(level.size.height, settings.threads, [&](int y) {
             std::vector<WeightedNormal> samples, scored;
             std::vector<VmfLobe> children, child(static_cast<size_t>(slots));
