@@ -36,7 +36,8 @@ std::vector<VmfLobe> fit_from_seeds(std::span<const WeightedNormal> samples, std
 {
     const bool few_samples = samples.size() <= size_t(kSecondStartMinSamples);
     EmSettings em = settings.em;
-    if (few_samples) em.max_iterations = std::min(em.max_iterations, kFewSampleIterations);
+    if (few_samples && settings.few_sample_shortcut)
+        em.max_iterations = std::min(em.max_iterations, kFewSampleIterations);
     std::vector<VmfLobe> from_children = farthest_point_seeds(child_lobes, samples, count);
     const double children_fit = fit_vmf_mixture(samples, from_children, em).mean_log_likelihood;
     if (!settings.two_starts || few_samples) {
