@@ -109,11 +109,7 @@ void align_lobe_slots(LobePyramid& pyramid, const PyramidSettings& settings, con
         const int width = level.size.width;
         const int rows_here = level.size.height;
         parallel_rows(rows_here, settings.threads, [&](int y) {
-            std::vector<VmfLobe> parent(static_cast<size_t>(slots)), left(static_cast<size_t>(slots)), current(static_cast<size_t>(slots));
             std::vector<VmfLobe> ancestor(static_cast<size_t>(slots));
-            std::vector<WeightedNormal> samples;
-            std::vector<VmfLobe> lobes;
-            std::vector<int> slot_of;
             if (l == 0) {
                 // Each level-0 texel joins the slot of the top level's most responsible lobe.
                 std::optional<MostResponsibleSlot> slot_of_normal;
@@ -129,25 +125,31 @@ void align_lobe_slots(LobePyramid& pyramid, const PyramidSettings& settings, con
                 }
                 return;
             }
+            // Alignment visits every texel of every level: the parent and the left neighbour (already
+            // aligned) are read where they are stored, and the texel is reordered in place.
+            const LobeLevel& coarser = pyramid.levels[size_t(l) + 1];
+            std::vector<WeightedNormal> samples;
+            std::vector<VmfLobe> lobes;
+            std::array<int, kMaxLobes> slot_of;
             for (int x = 0; x < width; ++x) {
-                pyramid.texel(l + 1, x / 2, y / 2, parent);
-                std::span<const VmfLobe> left_span;
-                if (x > 0) {
-                    pyramid.texel(l, x - 1, y, left);
-                    left_span = left;
-                }
+                const size_t parent_texel = size_t(y / 2) * size_t(coarser.size.width) + size_t(x / 2);
+                const std::span<const VmfLobe> parent(&coarser.lobes[parent_texel * size_t(slots)], size_t(slots));
                 const size_t t = size_t(y) * size_t(width) + size_t(x);
-                pyramid.texel_lobes(l, x, y, lobes);
-                slot_of.resize(lobes.size());
-                assign_slots(lobes, parent, left_span, slot_of);
+                const std::span<VmfLobe> stored(&level.lobes[t * size_t(slots)], size_t(slots));
+                const std::span<const VmfLobe> left =
+                    x > 0 ? std::span<const VmfLobe>(stored.data() - slots, size_t(slots)) : std::span<const VmfLobe>();
+                lobes.clear();
+                for (const VmfLobe& lobe : stored)
+                    if (lobe.alpha > 0.0f) lobes.push_back(lobe);
+                assign_slots(lobes, parent, left, std::span(slot_of).first(lobes.size()));
 
                 if (settings.alignment_strength > 0.0f && lobes.size() > 1) {
                     // eq. 23's pull for each lobe: C Σ_k α_jk μ_jk over the neighbours' slot.
                     std::vector<Vec3> pull(lobes.size());
                     for (size_t i = 0; i < lobes.size(); ++i) {
-                        const int s = slot_of[i];
-                        Vec3 sum = parent[size_t(s)].alpha * parent[size_t(s)].mu;
-                        if (x > 0) sum += left[size_t(s)].alpha * left[size_t(s)].mu;
+                        const size_t s = size_t(slot_of[i]);
+                        Vec3 sum = parent[s].alpha * parent[s].mu;
+                        if (!left.empty()) sum += left[s].alpha * left[s].mu;
                         pull[i] = settings.alignment_strength * sum;
                     }
                     gather_footprint(pyramid.source, l, x, y, pyramid.wrap, samples);
@@ -157,9 +159,8 @@ void align_lobe_slots(LobePyramid& pyramid, const PyramidSettings& settings, con
                     if (std::all_of(polished.begin(), polished.end(), [](const VmfLobe& l) { return l.alpha > 0.0f; }))
                         lobes = std::move(polished);
                 }
-                std::fill(current.begin(), current.end(), VmfLobe{});
-                for (size_t i = 0; i < lobes.size(); ++i) current[size_t(slot_of[i])] = lobes[i];
-                std::copy(current.begin(), current.end(), &level.lobes[t * size_t(slots)]);
+                std::fill(stored.begin(), stored.end(), VmfLobe{});
+                for (size_t i = 0; i < lobes.size(); ++i) stored[size_t(slot_of[i])] = lobes[i];
             }
         }, [&](double fraction) {
             return !tick || tick(rows_total > 0 ? (rows_before + fraction * rows_here) / rows_total : 1.0);
