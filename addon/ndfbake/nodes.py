@@ -749,8 +749,10 @@ def _socket_by_identifier(sockets, identifier):
 
 
 def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee_output=""):
-    """Undoes insert_group_node: the bypassed links leave the Principled BSDF again, and the group
-    node and the EEVEE output it added go. Returns the group tree it used (or None)."""
+    """Undoes insert_group_node: the EEVEE output it added goes, and every link now leaving the
+    group node leaves the Principled BSDF again, wherever the user has led it since the bake (a
+    Mix Shader put after the group stays); where the group node is gone, the links it bypassed
+    come back. Then the group node goes. Returns the group tree it used (or None)."""
     nodes = material_tree.nodes
     added = nodes.get(eevee_output) if eevee_output else None
     if added is not None and added.get(TAG) is not None:
@@ -759,19 +761,23 @@ def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee
     principled = nodes.get(principled_name)
     group_tree = node.node_tree if node is not None else None
     _remove_drivers(material_tree, node_name)
-    if node is not None and "BSDF" in node.outputs:
-        for link in list(node.outputs["BSDF"].links):
+    if node is not None:
+        leaving = [link for output in node.outputs if output.type == "SHADER" for link in output.links]
+        targets = [(link.to_socket, link.is_muted) for link in leaving]
+        for link in leaving:
             material_tree.links.remove(link)
-    if principled is not None:
+    else:
+        targets = []
         for to_node_name, identifier, muted in bypassed:
             to_node = nodes.get(to_node_name)
             socket = _socket_by_identifier(to_node.inputs, identifier) if to_node is not None else None
-            if socket is None:
-                continue
+            if socket is not None:
+                targets.append((socket, muted))
+    if principled is not None:
+        for socket, muted in targets:
             for link in list(socket.links):
                 material_tree.links.remove(link)
-            new = material_tree.links.new(principled.outputs["BSDF"], socket)
-            new.is_muted = muted
+            material_tree.links.new(principled.outputs["BSDF"], socket).is_muted = muted
     if node is not None:
         nodes.remove(node)
     return group_tree
