@@ -91,9 +91,10 @@ def main():
     for material in materials:
         try:
             if args.revert:
-                removed, left = bake.revert(material)
-                print("reverted %s: %d files deleted%s" % (material.name, removed,
-                                                          "; could not delete " + ", ".join(left) if left else ""))
+                removed, left, kept_for = bake.revert(material)
+                print("reverted %s: %d files deleted%s%s" % (
+                    material.name, removed, "; could not delete " + ", ".join(left) if left else "",
+                    "; its lobe folder stays: %s use it" % ", ".join(kept_for) if kept_for else ""))
             else:
                 result = bake.bake_material(material, settings)
                 print("baked %s into %s: %s" % (material.name, result.folder, result.summary))

@@ -12,21 +12,29 @@ lobe files and their folder are deleted.
 
 Files (choices the design leaves open):
 - The lobe textures go into a folder beside the .blend named after the material,
-  `//<material>.ndfbake/` (characters outside [A-Za-z0-9_.-] become '_'), and images refer to
-  them with relative paths, so the .blend and its folders move together. An unsaved .blend has no
-  "beside": baking it is refused (UNSAVED_BLEND). With `pack`, the level-0 textures are also
-  packed into the .blend (the files stay until Revert).
+  `//<material>.ndfbake/`, and images refer to them with relative paths, so the .blend and its
+  folders move together. A name with characters outside [A-Za-z0-9_.-] has them replaced by '_'
+  and gets '~' and a hash of the exact name appended (`//Metal_01~1a2b3c4d.ndfbake/` for
+  "Metal 01"), so that no two names share a folder; so does a name whose plain folder another
+  material's bake already uses (on a case-insensitive disk "Metal" and "metal" would). A folder
+  is owned by the materials whose bake records name it: a copy of a baked material (Shift+D
+  duplicates the record) shares it, re-baking the copy moves it to a folder of its own, and Revert
+  deletes files only when no other material uses them. An unsaved .blend has no "beside": baking
+  it is refused (UNSAVED_BLEND). With `pack`, the level-0 textures are also packed into the .blend
+  (the files stay until Revert).
 - The library writes the levels the scene's cameras reach (scene_lod.py), one MIP atlas per lobe
-  slot, and report.json through a staging folder renamed into place, so a failed or cancelled
-  re-bake leaves the previous files; a folder this bake created is removed again when the bake
-  fails or is cancelled.
+  slot, and report.json into a pending folder beside the lobe folder; finish() moves them into
+  place only after it has checked the material, so a failed or cancelled re-bake leaves the
+  previous files and the material that uses them as they were.
 - Level of detail (BakeSettings.level_of_detail): "SCENE" (default) samples the atlases at the
   level the node group computes from the camera distance, the view angle and the constants
   scene_lod.py measured (texel density, pixel angle), in both engines; "RENDERER" samples
   level 0 with Linear interpolation and leaves filtering to the renderer (EEVEE MIP-maps it; Cycles
-  only averages its pixel samples). A material no camera sees, or a scene without a camera, gets
-  "RENDERER". README gives the measurement behind the default.
+  only averages its pixel samples). A material no camera sees, a scene without a camera, or a
+  texture with box, sphere or tube projection (no UV for the atlas lookup) gets "RENDERER".
+  README gives the measurement behind the default.
 """
+import hashlib
 import json
 import os
 import re
@@ -78,12 +86,44 @@ def safe_name(name):
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip(".") or "material"
 
 
+def folder_name(name, hashed=False):
+    """'<name>.ndfbake', or with '~<hash of the exact name>' where the name is not kept as it is
+    (or `hashed`): '~' never survives safe_name, so a hashed folder is no plain one."""
+    safe = safe_name(name)
+    if safe != name or hashed:
+        safe += "~" + hashlib.sha1(name.encode("utf-8")).hexdigest()[:8]
+    return safe + FOLDER_SUFFIX
+
+
+def _same_folder(a, b):
+    return os.path.normcase(os.path.normpath(a)).casefold() == os.path.normcase(os.path.normpath(b)).casefold()
+
+
+def folder_users(folder, but=None):
+    """The materials, other than `but`, whose bake record names `folder` (absolute)."""
+    users = []
+    for material in bpy.data.materials:
+        rec = material_scan.record(material) if material is not but else None
+        if rec and rec.get("folder") and _same_folder(bpy.path.abspath(rec["folder"]), folder):
+            users.append(material)
+    return users
+
+
 def lobe_folder(material):
-    """('//<material>.ndfbake', absolute path); the absolute path is '' for an unsaved .blend."""
-    relative = "//" + safe_name(material.name) + FOLDER_SUFFIX
+    """('//…ndfbake', absolute path) where the material's lobe textures go: its bake's folder where
+    no other material shares it, else a folder named after it that no other bake uses (see above);
+    the absolute path is '' for an unsaved .blend."""
+    rec = material_scan.record(material)
+    candidates = ([rec["folder"]] if rec and rec.get("folder") else []) + [
+        "//" + folder_name(material.name), "//" + folder_name(material.name, hashed=True)]
     if not bpy.data.filepath:
-        return relative, ""
-    return relative, os.path.normpath(bpy.path.abspath(relative))
+        return candidates[0], ""
+    for relative in candidates:
+        absolute = os.path.normpath(bpy.path.abspath(relative))
+        if not folder_users(absolute, but=material):
+            return relative, absolute
+    raise BakeError("FOLDER_IN_USE", "every lobe folder for '%s' is used by another material's bake: %s"
+                    % (material.name, ", ".join(candidates)))
 
 
 def is_baked(material):
@@ -113,15 +153,22 @@ def _plan_lod(material, scan, settings):
     by the renderer."""
     if settings.level_of_detail != "SCENE":
         return None
-    uv_map = material.node_tree.nodes[scan.targets[0].normal_map].uv_map
-    return scene_lod.plan(bpy.context.scene, material, tuple(scan.image.size), uv_map)
+    tree = material.node_tree
+    if any(tree.nodes[t.image_texture].projection != "FLAT" for t in scan.targets):
+        return None  # the atlas lookup needs UVs: box/sphere/tube projection keeps the renderer's
+    uv_map = tree.nodes[scan.targets[0].normal_map].uv_map
+    try:
+        return scene_lod.plan(bpy.context.scene, material, tuple(scan.image.size), uv_map)
+    except native.Error as e:
+        raise BakeError("BAD_MESH", "cannot measure the texel density of the meshes using '%s' (%s): fix the mesh, "
+                                    "or set Level of Detail to Renderer" % (material.name, e.message)) from None
 
 
-def prepare(material, settings=None, pending=False):
+def prepare(material, settings=None):
     """Checks the material and the library; returns a BakeJob or raises BakeError. Changes nothing.
-    pending: the native bake writes into a sibling folder '<lobe folder>.pending' that finish()
-    moves into place, so that several bakes can all be cancelled before any changes a file
-    (bake_all); discard_pending() throws one away."""
+    The native bake writes into a sibling folder '<lobe folder>.pending' that finish() moves into
+    place once it has checked the material, so that a bake (or several, bake_all) can fail or be
+    cancelled before any file changes; discard_pending() throws one away."""
     settings = settings or BakeSettings()
     lib, message = native.status()
     if lib is None:
@@ -143,7 +190,7 @@ def prepare(material, settings=None, pending=False):
     if settings.level_of_detail not in ("SCENE", "RENDERER"):
         raise BakeError("BAD_SETTINGS", "level of detail must be SCENE or RENDERER, got %r" % settings.level_of_detail)
     return BakeJob(material_name=material.name, image_path=scan.image_path, folder=relative,
-                   out_dir=absolute + PENDING_SUFFIX if pending else absolute, final_dir=absolute,
+                   out_dir=absolute + PENDING_SUFFIX, final_dir=absolute,
                    wrap=native.WRAP_REPEAT if scan.wrap == "REPEAT" else native.WRAP_CLAMP,
                    roughness=min(max(scan.roughness, 0.01), 1.0), settings=settings,
                    targets=[(t.principled, t.normal_map, t.image_texture) for t in scan.targets],
@@ -162,7 +209,7 @@ class BakeJob:
         self.material_name = material_name
         self.image_path = image_path
         self.folder = folder
-        self.out_dir = out_dir   # where the library writes; final_dir unless the job is pending
+        self.out_dir = out_dir   # where the library writes: the pending folder, final_dir once committed
         self.final_dir = final_dir
         self.wrap = wrap
         self.roughness = roughness
@@ -260,7 +307,7 @@ def _bake_error(error, job):
     if error.status == native.ERROR_CANCELLED:
         return BakeError("CANCELLED", "bake of '%s' cancelled: no file and no node changed" % name)
     if error.status == native.ERROR_IO:
-        return BakeError("OUTPUT_NOT_WRITABLE", "cannot write the lobe folder %s: %s" % (job.out_dir, error.message))
+        return BakeError("OUTPUT_NOT_WRITABLE", "cannot write the lobe folder %s: %s" % (job.final_dir, error.message))
     if error.status == native.ERROR_FILE_NOT_FOUND:
         return BakeError("MISSING_FILE", error.message)
     if error.status in (native.ERROR_UNSUPPORTED_FORMAT, native.ERROR_CORRUPT_FILE):
@@ -436,6 +483,12 @@ def finish(job):
     keep = {im.name for im in images}
     still_ours = [name for name in old_images if name in keep]
     _remove_images([name for name in old_images if name not in keep])
+    # A previous bake in another folder (a copy's, shared with its original): its files go when
+    # no other material uses them.
+    if old and old.get("folder") and old["folder"] != job.folder:
+        old_folder = bpy.path.abspath(old["folder"])
+        if not folder_users(old_folder, but=material):
+            _delete_bake_files(old_folder, old.get("files", []))
 
     files = report.get("files") or sorted(os.listdir(job.out_dir))
     summary = summarize(report, job.seconds, len(images))
@@ -472,18 +525,24 @@ def bake_material(material, settings=None, progress=None):
     """prepare + run + finish on the calling thread (scripts, `blender -b`, operator execute())."""
     job = prepare(material, settings)
     job.run(progress)
-    return finish(job)
+    try:
+        return finish(job)
+    except BakeError:
+        discard_pending(job)
+        raise
 
 
 def materials_needing_bake(scene):
-    """Materials with a normal-map chain on objects the scene renders, in name order."""
+    """Materials of this file (not linked from a library: they are baked in their own) with a
+    normal-map chain on objects the scene renders, in name order."""
     found = {}
     for obj in scene.objects:
         if obj.hide_render or obj.type not in {"MESH", "CURVE", "SURFACE", "META", "FONT"}:
             continue
         for slot in obj.material_slots:
             material = slot.material
-            if material is not None and material.name not in found and material_scan.uses_normal_map(material):
+            if material is not None and material.library is None and material.name not in found \
+                    and material_scan.uses_normal_map(material):
                 found[material.name] = material
     return [found[name] for name in sorted(found)]
 
@@ -524,18 +583,23 @@ def _remove_images(names):
 
 
 def revert(material):
-    """Restores the material as it was before the bake and deletes the lobe files and their folder.
-    Returns (files removed, [files that could not be removed])."""
+    """Restores the material as it was before the bake and deletes the lobe files and their folder,
+    unless another material's bake uses them too (a copy of this material). Returns (files
+    removed, [files that could not be removed], [names of the materials that keep the folder])."""
     rec = material_scan.record(material) if material is not None else None
     if rec is None:
         raise BakeError("NOT_BAKED", "material '%s' has no ndfbake bake to revert" % (
             material.name if material is not None else ""))
+    if material.library is not None:
+        raise BakeError("LINKED_MATERIAL", "material '%s' is linked from %s: revert it in that file"
+                        % (material.name, material.library.filepath))
     _remove_nodes(material, rec)
     _remove_images(rec.get("images", []))
     folder = bpy.path.abspath(rec.get("folder", "")) if rec.get("folder") else ""
-    removed, left = _delete_bake_files(folder, rec.get("files", []))
+    sharing = [m.name for m in folder_users(folder, but=material)] if folder else []
+    removed, left = _delete_bake_files(folder, rec.get("files", [])) if not sharing else (0, [])
     del material[RECORD_KEY]
-    return removed, left
+    return removed, left, sharing
 
 
 def _delete_bake_files(folder, names):

@@ -14,7 +14,12 @@ Choices the design leaves open, made here:
   filtered group); two different images are refused (SEVERAL_IMAGES): the lobe folder is named
   after the material, and the library's commit step owns the whole folder.
 - The image must be a file on disk that the library can read: packed, generated, movie, sequence
-  and UDIM images are refused with a message saying what to do, and nothing changes.
+  and UDIM images are refused with a message saying what to do, and nothing changes. So is an
+  image with unsaved edits (painted in Blender): the library would read the file, not what the
+  user sees.
+- A muted Normal Map or Image Texture node is no normal map: the material renders without it.
+- A material linked from a library is refused (LINKED_MATERIAL): the bake changes the material
+  and writes beside the .blend, and neither would outlive a reload; bake it in its own file.
 - The Image datablock's colour space must be data (Non-Color, Raw or Linear). An sRGB-tagged
   normal map is refused (COLOR_SPACE), not baked raw: Blender renders such a material with the
   sRGB curve removed, so neither reading of the file would match both what the user sees now and
@@ -142,6 +147,9 @@ def check_image(image, node_name):
     path = image_file_path(image)
     if not image.filepath or not os.path.isfile(path):
         return Problem("MISSING_FILE", "the file of image '%s' is missing: %s" % (name, path or "(no path)"))
+    if image.is_dirty:
+        return Problem("UNSAVED_IMAGE", "image '%s' has edits that are not saved to its file: save it (Image > "
+                                        "Save) so that ndfbake bakes what you see" % name)
     colorspace = image.colorspace_settings.name
     if not image.colorspace_settings.is_data and colorspace not in DATA_COLOR_SPACES:
         return Problem("COLOR_SPACE", "image '%s' has Color Space '%s': a normal map is data, set its Color "
@@ -155,6 +163,12 @@ def scan(material):
     result = ScanResult(material=material.name if material else "")
     if material is None:
         result.problems.append(Problem("NO_MATERIAL", "no active material"))
+        return result
+    if material.library is not None:
+        result.problems.append(Problem(
+            "LINKED_MATERIAL", "material '%s' is linked from %s: bake it in that file (ndfbake changes the material "
+                               "and writes its lobe textures beside the .blend)" % (
+                                   material.name, material.library.filepath)))
         return result
     if not material.use_nodes or material.node_tree is None:
         result.problems.append(Problem("NO_NODES", "material '%s' does not use nodes" % material.name))
@@ -174,15 +188,19 @@ def scan(material):
                 "NO_PRINCIPLED", "material '%s' has no Principled BSDF reaching its output" % material.name))
             return result
 
-    normal_maps = []
+    normal_maps, muted = [], []
     for p in principled:
         node, _ = _upstream(p.inputs["Normal"])
         if node is not None and node.bl_idname == "ShaderNodeNormalMap":
-            normal_maps.append((p, node))
+            texture, _ = _upstream(node.inputs["Color"])
+            if node.mute or (texture is not None and texture.mute):
+                muted.append(node.name if node.mute else texture.name)
+            else:
+                normal_maps.append((p, node))
     if not normal_maps:
-        result.problems.append(Problem(
-            "NO_NORMAL_MAP", "material '%s' has no normal map: no Principled BSDF takes its Normal from a "
-                             "Normal Map node" % material.name))
+        why = ("its normal map is muted (%s)" % ", ".join(sorted(set(muted))) if muted else
+               "no Principled BSDF takes its Normal from a Normal Map node")
+        result.problems.append(Problem("NO_NORMAL_MAP", "material '%s' has no normal map: %s" % (material.name, why)))
         return result
 
     images = {}

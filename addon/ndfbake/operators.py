@@ -43,9 +43,9 @@ def _report_outcomes(operator, outcomes):
 
 class _ModalBakes:
     """Bakes a list of materials from the UI: each native bake on a worker thread, polled from a
-    modal timer, with progress in the progress bar and the status bar; Esc cancels. With several
-    materials the bakes are pending (bake.prepare(pending=True)) and finished together at the end,
-    so that Esc at any point leaves every material and file as it was."""
+    modal timer, with progress in the progress bar and the status bar; Esc cancels. The bakes are
+    pending (bake.prepare) and finished together at the end, so that Esc at any point leaves every
+    material and file as it was."""
 
     _timer = None
     _jobs = None      # prepared jobs still to run, in order
@@ -59,11 +59,10 @@ class _ModalBakes:
         if running_job is not None:
             self.report({"WARNING"}, "ndfbake: a bake is already running (Esc cancels it)")
             return {"CANCELLED"}
-        pending = len(materials) > 1
         self._jobs, self._done, self._outcomes = [], [], []
         for material in materials:
             try:
-                self._jobs.append(bake.prepare(material, bake.settings_from_material(material), pending=pending))
+                self._jobs.append(bake.prepare(material, bake.settings_from_material(material)))
             except bake.BakeError as e:
                 self._outcomes.append((material.name, e))
         if not self._jobs:
@@ -239,12 +238,15 @@ class NDFBAKE_OT_revert(bpy.types.Operator):
     def execute(self, context):
         material = _material(context, self.material)
         try:
-            removed, left = bake.revert(material)
+            removed, left, kept_for = bake.revert(material)
         except bake.BakeError as e:
             self.report({"ERROR"}, "ndfbake: " + e.message)
             return {"CANCELLED"}
         if left:
             self.report({"WARNING"}, "ndfbake: %s reverted; could not delete %s" % (material.name, ", ".join(left)))
+        elif kept_for:
+            self.report({"INFO"}, "ndfbake: %s reverted; its lobe textures stay, %s use%s them" % (
+                material.name, ", ".join(kept_for), "s" if len(kept_for) == 1 else ""))
         else:
             self.report({"INFO"}, "ndfbake: %s reverted, %d files deleted" % (material.name, removed))
         return {"FINISHED"}

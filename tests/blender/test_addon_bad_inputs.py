@@ -8,7 +8,9 @@ image; an 8-bit normal map whose Image datablock is sRGB (refused: see material_
 an object-space Normal Map node; a read-only output folder (the .blend's folder made read-only;
 as root, permission bits do not bind, so the bake runs under an unprivileged effective uid); a file
 where the lobe folder should go; an unsaved .blend; a corrupt image file; a Normal Map fed by
-something other than an Image Texture; two different normal-map images in one material.
+something other than an Image Texture; two different normal-map images in one material; a
+material linked from a library .blend (Bake and Revert refuse it); an image with unsaved edits; a
+muted Normal Map node; a mesh whose UVs are not finite (the level of detail cannot be measured).
 """
 import contextlib
 import os
@@ -195,9 +197,69 @@ def test_two_normal_map_images():
     _case(run)
 
 
+def test_linked_material():
+    def run(directory):
+        from ndfbake import bake
+        library = h.baked_scene(directory, material_name="Shared Metal")
+        bake.bake_material(library, bake.BakeSettings(max_lobes=2))  # baked in its own file
+        library.use_fake_user = True
+        bpy.ops.wm.save_mainfile()
+        h.reset_scene()
+        with bpy.data.libraries.load(os.path.join(directory, "scene.blend"), link=True) as (source, target):
+            target.materials = ["Shared Metal"]
+        material = bpy.data.materials["Shared Metal"]
+        h.plane_with(material)
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "shot.blend"))
+        expect_refused(material, "LINKED_MATERIAL", ["'Shared Metal'", "linked from", "scene.blend"], directory)
+        h.expect(not bake.materials_needing_bake(bpy.context.scene), "Bake All would bake a linked material")
+        before, files_before = h.dump_material(material), h.listing(directory)
+        try:
+            bake.revert(material)
+            raise AssertionError("revert of a linked material succeeded")
+        except bake.BakeError as e:
+            h.expect(e.code == "LINKED_MATERIAL" and "revert it in that file" in e.message, "%s: %s" % (e.code, e.message))
+        h.expect(h.dump_material(material) == before and h.listing(directory) == files_before,
+                 "a refused revert changed the material or the files")
+    _case(run)
+
+
+def test_image_with_unsaved_edits():
+    def run(directory):
+        material = h.baked_scene(directory)
+        image = bpy.data.images["normal.png"]
+        pixels = list(image.pixels)
+        pixels[0] = 1.0 - pixels[0]
+        image.pixels = pixels  # what painting in the Image Editor does
+        h.expect(image.is_dirty, "the image did not become dirty")
+        expect_refused(material, "UNSAVED_IMAGE", ["'normal.png'", "not saved", "Image > Save"], directory)
+    _case(run)
+
+
+def test_muted_normal_map():
+    def run(directory):
+        from ndfbake import bake
+        material = h.baked_scene(directory)
+        material.node_tree.nodes["Normal Map"].mute = True
+        expect_refused(material, "NO_NORMAL_MAP", ["'Bumpy'", "muted", "Normal Map"], directory)
+        h.expect(not bake.materials_needing_bake(bpy.context.scene), "Bake All would bake a muted normal map")
+    _case(run)
+
+
+def test_non_finite_uvs():
+    def run(directory):
+        material = h.baked_scene(directory)
+        bpy.ops.object.camera_add(location=(0.0, 0.0, 5.0))
+        bpy.context.scene.camera = bpy.context.active_object
+        bpy.data.objects["Plane"].data.uv_layers.active.data[0].uv = (float("nan"), 0.0)
+        bpy.ops.wm.save_mainfile()
+        expect_refused(material, "BAD_MESH", ["'Bumpy'", "not finite", "Level of Detail to Renderer"], directory)
+    _case(run)
+
+
 if __name__ == "__main__":
     h.import_addon()
-    h.run([test_material_without_normal_map, test_missing_image_file, test_packed_image, test_generated_image,
+    h.run([test_linked_material, test_image_with_unsaved_edits, test_muted_normal_map, test_non_finite_uvs,
+           test_material_without_normal_map, test_missing_image_file, test_packed_image, test_generated_image,
            test_srgb_tagged_normal_map, test_object_space_normal_map, test_read_only_output_folder,
            test_file_in_place_of_the_output_folder, test_unsaved_blend, test_corrupt_image_file,
            test_normal_map_not_from_an_image_texture, test_two_normal_map_images])

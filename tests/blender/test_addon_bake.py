@@ -85,8 +85,9 @@ def test_bake_adds_only_the_group_and_bypass():
             h.expect(image.alpha_mode == "CHANNEL_PACKED", "alpha mode")
             h.expect(image.has_data or image.size[0] > 0, "image %d did not load" % j)
 
-        removed, left = bake.revert(material)
-        h.expect(not left and removed == len(files), "revert removed %d of %d files (%s)" % (removed, len(files), left))
+        removed, left, kept_for = bake.revert(material)
+        h.expect(not left and not kept_for and removed == len(files),
+                 "revert removed %d of %d files (%s; kept for %s)" % (removed, len(files), left, kept_for))
         restored = h.dump_material(material)
         for name in set(before["nodes"]) | set(restored["nodes"]):
             h.expect(before["nodes"].get(name) == restored["nodes"].get(name), "node %s differs after revert:\n%s\n%s"

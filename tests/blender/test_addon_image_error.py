@@ -196,11 +196,11 @@ def test_command_line_bake_changes_only_the_baked_materials():
             h.expect(new, "the bake added no %s" % kind)
             untagged = [name for name in new if nodes.TAG not in after[kind][name][-1]]
             h.expect(not untagged, "%s added without the ndfbake tag: %s" % (kind, untagged))
-        folders = [os.path.join(directory, bake.safe_name(name) + bake.FOLDER_SUFFIX) for name in expected]
+        folders = [os.path.join(directory, bake.folder_name(name)) for name in expected]
         h.expect(all(os.path.isdir(f) for f in folders), "a lobe folder is missing: %s" % os.listdir(directory))
 
         for name in expected:
-            removed, left = bake.revert(bpy.data.materials[name])
+            removed, left, _ = bake.revert(bpy.data.materials[name])
             h.expect(removed > 0 and not left, "revert %s: %d removed, left %s" % (name, removed, left))
         reverted = dump_file()
         for name in expected:

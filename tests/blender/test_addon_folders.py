@@ -1,0 +1,180 @@
+"""Lobe folders belong to the bakes that name them, a failed re-bake keeps the bake it replaces,
+and Revert keeps what the user did after the bake.
+
+Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_folders.py -- LIB
+
+- Names that safe_name maps to one folder ("Metal 01", "Metal_01") and names that differ only in
+  case get folders of their own; reverting one leaves the other's files and images intact.
+- A copy of a baked material (Shift+D copies the bake record): reverting the copy keeps the
+  original's files; re-baking the copy moves it to a folder of its own; reverting the original
+  then deletes its folder.
+- A re-bake whose material changed while the library ran (MATERIAL_CHANGED) leaves the previous
+  bake's files, images and nodes as they were, and no pending folder.
+- A Mix Shader the user put after the group node stays after Revert (fed by the Principled again)
+  and after a re-bake (fed by the new group).
+- Box projection bakes level 0 for the renderer to filter, with a camera in the scene.
+"""
+import os
+import sys
+
+import bpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import test_addon_helpers as h  # noqa: E402
+
+
+def _lobe_files(folder):
+    return sorted(n for n in os.listdir(folder) if n.endswith(".exr")) if os.path.isdir(folder) else []
+
+
+def _images_load(material):
+    from ndfbake import material_scan
+    names = material_scan.record(material)["images"]
+    for name in names:
+        image = bpy.data.images[name]
+        image.reload()
+        h.expect(image.size[0] > 0, "image %s of %s does not load (%s)" % (name, material.name, image.filepath))
+    return names
+
+
+def test_names_that_clash_on_disk_get_folders_of_their_own():
+    from ndfbake import bake, material_scan
+    directory = h.temp_dir()
+    try:
+        first = h.baked_scene(directory, material_name="Metal 01")
+        png = os.path.join(directory, "normal.png")
+        others = [h.normal_mapped_material(name, png) for name in ("Metal_01", "metal_01")]
+        for k, material in enumerate(others):
+            h.plane_with(material, "Plane %d" % k)
+        bpy.ops.wm.save_mainfile()
+        results = [bake.bake_material(m, bake.BakeSettings(max_lobes=2)) for m in [first] + others]
+        folders = [r.folder for r in results]
+        print("  folders: %s" % folders)
+        h.expect(len({f.casefold() for f in folders}) == 3, "shared folders: %s" % folders)
+        h.expect(folders[1] == "//Metal_01.ndfbake", "a safe name keeps its plain folder: %s" % folders[1])
+        h.expect(folders[0].startswith("//Metal_01~") and folders[2].startswith("//metal_01~"),
+                 "hashed folders: %s" % folders)
+        kept = {r.material: _lobe_files(bpy.path.abspath(r.folder)) for r in results}
+        removed, left, kept_for = bake.revert(first)
+        h.expect(removed > 0 and not left and not kept_for, "revert: %d removed, %s, %s" % (removed, left, kept_for))
+        for material in others:
+            folder = bpy.path.abspath(material_scan.record(material)["folder"])
+            h.expect(_lobe_files(folder) == kept[material.name], "%s lost files" % material.name)
+            _images_load(material)
+    finally:
+        h.cleanup(directory)
+
+
+def test_a_copy_shares_the_folder_until_it_is_baked_itself():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        original = h.baked_scene(directory)
+        bake.bake_material(original, bake.BakeSettings(max_lobes=2))
+        folder = os.path.join(directory, "Bumpy.ndfbake")
+        files = _lobe_files(folder)
+        copy = original.copy()
+        h.expect(copy.name == "Bumpy.001" and bake.is_baked(copy), "the copy has the bake record")
+        removed, left, kept_for = bake.revert(copy)
+        h.expect(removed == 0 and kept_for == ["Bumpy"], "revert of the copy: %d removed, kept for %s"
+                 % (removed, kept_for))
+        h.expect(_lobe_files(folder) == files and bake.is_baked(original), "the original lost its bake")
+        _images_load(original)
+
+        copy = original.copy()
+        result = bake.bake_material(copy, bake.BakeSettings(max_lobes=1))
+        h.expect(result.folder == "//%s.ndfbake" % copy.name, "the copy's re-bake went to %s" % result.folder)
+        h.expect(_lobe_files(folder) == files, "re-baking the copy changed the original's files")
+        _images_load(original)
+        _images_load(copy)
+        removed, left, kept_for = bake.revert(original)
+        h.expect(removed == len(files) + 1 and not kept_for, "revert of the original: %d removed, kept for %s"
+                 % (removed, kept_for))
+        h.expect(not os.path.exists(folder), "the original's folder is left")
+        _images_load(copy)
+    finally:
+        h.cleanup(directory)
+
+
+def test_a_rebake_that_fails_keeps_the_previous_bake():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=3))
+        baked, listing = h.dump_material(material), h.listing(directory)
+        job = bake.prepare(material, bake.BakeSettings(max_lobes=1))
+        job.run()
+        material.node_tree.nodes["Normal Map"].name = "Renamed"
+        try:
+            bake.finish(job)
+            raise AssertionError("finish() accepted a material whose nodes changed")
+        except bake.BakeError as e:
+            h.expect(e.code == "MATERIAL_CHANGED", "%s: %s" % (e.code, e.message))
+        bake.discard_pending(job)
+        material.node_tree.nodes["Renamed"].name = "Normal Map"
+        h.expect(h.listing(directory) == listing, "files changed: %s" % h.listing(directory))
+        h.expect(h.dump_material(material) == baked, "the baked material changed")
+        h.expect(len(_images_load(material)) == 3, "the previous bake's images")
+    finally:
+        h.cleanup(directory)
+
+
+def test_revert_and_rebake_keep_a_mix_shader_added_after_the_bake():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        tree = material.node_tree
+        group, output = tree.nodes["ndfbake"], tree.nodes["Material Output"]
+        mix = tree.nodes.new("ShaderNodeMixShader")
+        mix.name = "User Mix"
+        tree.links.new(group.outputs["BSDF"], mix.inputs[1])
+        tree.links.new(mix.outputs[0], output.inputs["Surface"])
+
+        def feeds_mix():
+            socket = tree.nodes["User Mix"].inputs[1]
+            return socket.links[0].from_node.name if socket.is_linked else None
+        bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        h.expect(feeds_mix() == "ndfbake", "after re-bake the mix is fed by %s" % feeds_mix())
+        h.expect(output.inputs["Surface"].links[0].from_node.name == "User Mix", "the output lost the mix")
+        bake.revert(material)
+        h.expect(feeds_mix() == "Principled BSDF", "after revert the mix is fed by %s" % feeds_mix())
+        h.expect(output.inputs["Surface"].links[0].from_node.name == "User Mix", "the output lost the mix")
+        h.expect(not [n for n in tree.nodes if n.get("ndfbake") is not None], "ndfbake nodes left")
+    finally:
+        h.cleanup(directory)
+
+
+def test_box_projection_leaves_filtering_to_the_renderer():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        bpy.ops.object.camera_add(location=(0.0, 0.0, 5.0))
+        bpy.context.scene.camera = bpy.context.active_object
+        tree = material.node_tree
+        texture = tree.nodes["Normal Texture"]
+        texture.projection = "BOX"
+        coords = tree.nodes.new("ShaderNodeTexCoord")
+        tree.links.new(coords.outputs["Object"], texture.inputs["Vector"])
+        bpy.ops.wm.save_mainfile()
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        h.expect("level 0 filtered by the renderer" in result.summary, result.summary)
+        inner = tree.nodes["ndfbake"].node_tree
+        projections = {n.projection for n in inner.nodes if n.bl_idname == "ShaderNodeTexImage"}
+        h.expect(projections == {"BOX"}, "lobe textures sampled with %s" % projections)
+        h.expect(not any(n.startswith("atlas") for n in os.listdir(os.path.join(directory, "Bumpy.ndfbake"))),
+                 "atlases written for a box-projected texture")
+    finally:
+        h.cleanup(directory)
+
+
+if __name__ == "__main__":
+    h.import_addon()
+    h.run([test_names_that_clash_on_disk_get_folders_of_their_own,
+           test_a_copy_shares_the_folder_until_it_is_baked_itself,
+           test_a_rebake_that_fails_keeps_the_previous_bake,
+           test_revert_and_rebake_keep_a_mix_shader_added_after_the_bake,
+           test_box_projection_leaves_filtering_to_the_renderer])
