@@ -8,7 +8,8 @@ Without --material it bakes every material the scene needs: those with a tangent
 map (Image Texture -> Normal Map -> Principled BSDF) on objects the scene renders. Each material's
 lobe textures go to //<material>.ndfbake/ beside the .blend. One line per material is printed,
 then a summary; the .blend is saved afterwards (its node groups refer to the textures by relative
-path) unless --no-save. --revert undoes earlier bakes instead (nodes restored, files deleted).
+path) unless --no-save; saving deletes the lobe folders that re-bakes replaced. --revert undoes
+earlier bakes instead (nodes restored; the lobe folders deleted when the .blend is saved).
 
 Exit status: 0 when every material succeeded; 1 when any failed (a failed material and its files
 are left exactly as they were; the others are still baked and saved); 2 for bad usage (unknown
@@ -91,10 +92,9 @@ def main():
     for material in materials:
         try:
             if args.revert:
-                removed, left, kept_for = bake.revert(material)
-                print("reverted %s: %d files deleted%s%s" % (
-                    material.name, removed, "; could not delete " + ", ".join(left) if left else "",
-                    "; its lobe folder stays: %s use it" % ", ".join(kept_for) if kept_for else ""))
+                folder, kept_for = bake.revert(material)
+                print("reverted %s%s" % (material.name, "; its lobe folder stays: %s use it" % ", ".join(kept_for)
+                                         if kept_for else ""))
             else:
                 result = bake.bake_material(material, settings)
                 print("baked %s into %s: %s" % (material.name, result.folder, result.summary))
@@ -103,7 +103,7 @@ def main():
             failures += 1
             print("FAILED %s [%s]: %s" % (material.name, e.code, e.message))
     if changed and not args.no_save:
-        bpy.ops.wm.save_mainfile()
+        bpy.ops.wm.save_mainfile()  # also deletes the lobe folders no material uses any more (bake.py)
     print("%s %d of %d materials in %.1f s%s" % ("reverted" if args.revert else "baked", changed, len(materials),
                                                time.perf_counter() - start,
                                                ", saved " + bpy.data.filepath if changed and not args.no_save else ""))

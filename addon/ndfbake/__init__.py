@@ -38,6 +38,7 @@ def register():
 
 
 def unregister():
+    bake.remove_handlers()
     del bpy.types.Material.ndfbake_settings
     for cls in reversed(ui.classes + operators.classes):
         bpy.utils.unregister_class(cls)

@@ -7,25 +7,33 @@ A bake has three steps, so that the UI can run the slow one on a worker thread:
     result = finish(job)                # main thread: images, node group, bypass, bake record
 
 `bake_material()` runs the three in a row (scripts, `blender -b`). `revert()` undoes a bake:
-the Principled BSDF's links come back, the group node, node groups and lobe images go, and the
-lobe files and their folder are deleted.
+the Principled BSDF's links come back, the group node, node groups and lobe images go; the lobe
+files go when the .blend is next saved (see below).
 
 Files (choices the design leaves open):
 - The lobe textures go into a folder beside the .blend named after the material,
   `//<material>.ndfbake/`, and images refer to them with relative paths, so the .blend and its
   folders move together. A name with characters outside [A-Za-z0-9_.-] has them replaced by '_'
   and gets '~' and a hash of the exact name appended (`//Metal_01~1a2b3c4d.ndfbake/` for
-  "Metal 01"), so that no two names share a folder; so does a name whose plain folder another
-  material's bake already uses (on a case-insensitive disk "Metal" and "metal" would). A folder
-  is owned by the materials whose bake records name it: a copy of a baked material (Shift+D
-  duplicates the record) shares it, re-baking the copy moves it to a folder of its own, and Revert
-  deletes files only when no other material uses them. An unsaved .blend has no "beside": baking
-  it is refused (UNSAVED_BLEND). With `pack`, the level-0 textures are also packed into the .blend
-  (the files stay until Revert).
+  "Metal 01"), so that no two names share a folder.
+- A bake's folder is never written again: a re-bake goes into a new one (`//<material>~2.ndfbake/`
+  while the previous one still exists), so that Ctrl-Z after a re-bake or a Revert finds the
+  previous bake's files where its nodes expect them, and the .blend on disk keeps working until it
+  is saved again. Folders are chosen among those that exist neither on disk nor in any material's
+  bake record (compared without case: a .blend may move to a case-insensitive disk), which also
+  keeps apart two .blend files beside each other with a material of the same name.
+- The folders this session's bakes wrote or let go (a re-bake's previous one, a reverted one) are
+  deleted when the .blend is saved, those that no material's bake and no image then uses (a
+  save_post handler): what a saved .blend refers to always exists. A bake's folder is where its
+  images are (record_folder), which stays right when "Save As" moves the .blend elsewhere. A copy of a baked material (Shift+D
+  copies the record) shares its folder, so it stays while either uses it. Only files the bake
+  writes are deleted, then the folder if it is empty.
 - The library writes the levels the scene's cameras reach (scene_lod.py), one MIP atlas per lobe
-  slot, and report.json into a pending folder beside the lobe folder; finish() moves them into
-  place only after it has checked the material, so a failed or cancelled re-bake leaves the
-  previous files and the material that uses them as they were.
+  slot, and report.json into a pending folder beside the new lobe folder, which finish() renames
+  into place only after it has checked the material: a failed or cancelled bake changes no file
+  and no node.
+- An unsaved .blend has no "beside": baking it is refused (UNSAVED_BLEND). With `pack`, the
+  level-0 textures are also packed into the .blend.
 - Level of detail (BakeSettings.level_of_detail): "SCENE" (default) samples the atlases at the
   level the node group computes from the camera distance, the view angle and the constants
   scene_lod.py measured (texel density, pixel angle), in both engines; "RENDERER" samples
@@ -43,6 +51,7 @@ import time
 from dataclasses import dataclass, field
 
 import bpy
+from bpy.app.handlers import persistent
 
 from . import material_scan, native, nodes, scene_lod
 
@@ -86,44 +95,131 @@ def safe_name(name):
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip(".") or "material"
 
 
-def folder_name(name, hashed=False):
-    """'<name>.ndfbake', or with '~<hash of the exact name>' where the name is not kept as it is
-    (or `hashed`): '~' never survives safe_name, so a hashed folder is no plain one."""
+def folder_name(name, version=1):
+    """'<name>.ndfbake', with '~<hash of the exact name>' where safe_name changed it ('~' never
+    survives safe_name, so no other name's folder looks the same), and '~<version>' from 2 up."""
     safe = safe_name(name)
-    if safe != name or hashed:
+    if safe != name:
         safe += "~" + hashlib.sha1(name.encode("utf-8")).hexdigest()[:8]
-    return safe + FOLDER_SUFFIX
+    return safe + ("~%d" % version if version > 1 else "") + FOLDER_SUFFIX
 
 
 def _same_folder(a, b):
     return os.path.normcase(os.path.normpath(a)).casefold() == os.path.normcase(os.path.normpath(b)).casefold()
 
 
+def record_folder(rec):
+    """The absolute folder of a bake: where its lobe images' files are (Blender remaps image paths
+    when the .blend is saved elsewhere; the record's relative 'folder' it does not), else the
+    record's folder."""
+    for name in rec.get("images", []):
+        image = bpy.data.images.get(name)
+        if image is not None and image.filepath:
+            return os.path.dirname(material_scan.image_file_path(image))
+    return os.path.normpath(bpy.path.abspath(rec["folder"])) if rec.get("folder") else ""
+
+
 def folder_users(folder, but=None):
-    """The materials, other than `but`, whose bake record names `folder` (absolute)."""
+    """The materials, other than `but`, whose bake is in `folder` (absolute)."""
     users = []
     for material in bpy.data.materials:
         rec = material_scan.record(material) if material is not but else None
-        if rec and rec.get("folder") and _same_folder(bpy.path.abspath(rec["folder"]), folder):
+        if rec and _same_folder(record_folder(rec), folder):
             users.append(material)
     return users
 
 
+def _images_used_in(folder):
+    """The images of files in `folder` that something still renders with: a user other than a node
+    group, or a node group that is itself so used. (ID.users is not enough: after Material.copy()
+    a removed group node can leave its group counted as used.)"""
+    images = [image for image in bpy.data.images if image.source == "FILE" and image.filepath
+              and _same_folder(os.path.dirname(material_scan.image_file_path(image)), folder)]
+    if not images:
+        return []
+    users = bpy.data.user_map(subset=images + list(bpy.data.node_groups))
+
+    def used(datablock, seen):
+        if datablock in seen:
+            return False
+        seen.add(datablock)
+        return any(not isinstance(user, bpy.types.NodeTree) or used(user, seen) for user in users.get(datablock, ()))
+    return [image for image in images if used(image, set())]
+
+
+# Bounds the search for a free folder: that many versions of one material on disk at once means
+# something else is wrong (a folder that cannot be deleted), and the user should hear of it.
+MAX_FOLDER_VERSIONS = 100
+
+
 def lobe_folder(material):
-    """('//…ndfbake', absolute path) where the material's lobe textures go: its bake's folder where
-    no other material shares it, else a folder named after it that no other bake uses (see above);
-    the absolute path is '' for an unsaved .blend."""
-    rec = material_scan.record(material)
-    candidates = ([rec["folder"]] if rec and rec.get("folder") else []) + [
-        "//" + folder_name(material.name), "//" + folder_name(material.name, hashed=True)]
+    """('//…ndfbake', absolute path) for a new bake of `material`: the first of its folder names
+    that no file on disk and no material's bake record (its own included) already has. The
+    absolute path is '' for an unsaved .blend."""
     if not bpy.data.filepath:
-        return candidates[0], ""
-    for relative in candidates:
+        return "//" + folder_name(material.name), ""
+    for version in range(1, MAX_FOLDER_VERSIONS + 1):
+        relative = "//" + folder_name(material.name, version)
         absolute = os.path.normpath(bpy.path.abspath(relative))
-        if not folder_users(absolute, but=material):
+        if not (os.path.lexists(absolute) or os.path.lexists(absolute + PENDING_SUFFIX) or folder_users(absolute)):
             return relative, absolute
-    raise BakeError("FOLDER_IN_USE", "every lobe folder for '%s' is used by another material's bake: %s"
-                    % (material.name, ", ".join(candidates)))
+    raise BakeError("FOLDER_IN_USE", "%d lobe folders of '%s' are in the way beside the .blend (%s …): save the "
+                                     ".blend to delete those it no longer uses, or remove them" % (
+                                         MAX_FOLDER_VERSIONS, material.name, folder_name(material.name)))
+
+
+# Folders this session's bakes wrote or released (absolute paths): delete_unused_folders() deletes
+# those no material names, on every save. Forgotten when another .blend is loaded.
+_session_folders = set()
+
+
+def _track(folder):
+    if folder:
+        _session_folders.add(os.path.normpath(folder))
+        _install_handlers()
+
+
+def delete_unused_folders():
+    """Deletes the bake files (then the folder, if empty) of every folder this session's bakes
+    wrote or released that no material names any more. Returns (files removed, [not removed])."""
+    removed, left = 0, []
+    for folder in sorted(_session_folders):
+        if folder_users(folder) or _images_used_in(folder):
+            continue
+        names = os.listdir(folder) if os.path.isdir(folder) else []
+        count, failed = _delete_bake_files(folder, names)
+        removed += count
+        left += failed
+        if not failed:
+            _session_folders.discard(folder)
+    return removed, left
+
+
+@persistent
+def _delete_unused_folders_on_save(*_):
+    removed, left = delete_unused_folders()
+    if left:
+        print("ndfbake: could not delete %s" % ", ".join(left))
+
+
+@persistent
+def _forget_session_folders(*_):
+    _session_folders.clear()
+
+
+def _install_handlers():
+    if _delete_unused_folders_on_save not in bpy.app.handlers.save_post:
+        bpy.app.handlers.save_post.append(_delete_unused_folders_on_save)
+    if _forget_session_folders not in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.append(_forget_session_folders)
+
+
+def remove_handlers():
+    """For the add-on's unregister()."""
+    for handlers, handler in ((bpy.app.handlers.save_post, _delete_unused_folders_on_save),
+                              (bpy.app.handlers.load_post, _forget_session_folders)):
+        if handler in handlers:
+            handlers.remove(handler)
 
 
 def is_baked(material):
@@ -184,9 +280,6 @@ def prepare(material, settings=None):
     if not absolute:
         raise BakeError("UNSAVED_BLEND", "save the .blend first: the lobe textures of '%s' are written beside it"
                         % material.name)
-    if os.path.exists(absolute) and not os.path.isdir(absolute):
-        raise BakeError("OUTPUT_NOT_WRITABLE", "cannot write the lobe folder %s: a file of that name is in the way"
-                        % absolute)
     if settings.level_of_detail not in ("SCENE", "RENDERER"):
         raise BakeError("BAD_SETTINGS", "level of detail must be SCENE or RENDERER, got %r" % settings.level_of_detail)
     return BakeJob(material_name=material.name, image_path=scan.image_path, folder=relative,
@@ -318,23 +411,16 @@ def _bake_error(error, job):
 
 
 def _commit_pending(job):
-    """Moves a pending job's files into its lobe folder, file by file (each an atomic rename),
-    removing the previous bake's files that the new one does not have."""
+    """Renames a pending job's folder into its lobe folder (new: see lobe_folder)."""
     if job.out_dir == job.final_dir:
         return
     try:
-        os.makedirs(job.final_dir, exist_ok=True)
-        fresh = set(os.listdir(job.out_dir))
-        for name in os.listdir(job.final_dir):
-            if _is_bake_file(name) and name not in fresh:
-                os.remove(os.path.join(job.final_dir, name))
-        for name in fresh:
-            os.replace(os.path.join(job.out_dir, name), os.path.join(job.final_dir, name))
-        os.rmdir(job.out_dir)
+        os.rename(job.out_dir, job.final_dir)
     except OSError as e:
         raise BakeError("OUTPUT_NOT_WRITABLE", "cannot move the lobe textures of '%s' into %s: %s"
                         % (job.material_name, job.final_dir, e.strerror)) from None
     job.out_dir = job.final_dir
+    _track(job.final_dir)
 
 
 def discard_pending(job):
@@ -375,27 +461,23 @@ def _relative(path):
         return path
 
 
-def _load_lobe_images(material_name, paths, pack):
-    """Lobe images (Non-Color, channel-packed alpha: A is data, α·r_z), named
-    "<material> lobe j" when this call creates them. Returns the images and the names of those
-    this call created."""
-    images, created = [], []
-    before = set(bpy.data.images)
+def _load_lobe_images(material_name, paths, pack, created):
+    """Lobe images (Non-Color, channel-packed alpha: A is data, α·r_z), named "<material> lobe j",
+    all new (a bake's folder is new, see lobe_folder); their names are appended to `created` as
+    they are made, for the caller to remove on an error."""
+    images = []
     for j, path in enumerate(paths):
-        image = bpy.data.images.load(path, check_existing=True)
-        if image not in before:
-            image.name = "%s lobe %d" % (material_name, j)
-            image[nodes.TAG] = nodes.GROUP_VERSION
-            created.append(image.name)
-        else:
-            image.reload()  # a re-bake replaced the file
+        image = bpy.data.images.load(path)
+        image.name = "%s lobe %d" % (material_name, j)
+        image[nodes.TAG] = nodes.GROUP_VERSION
+        created.append(image.name)
         image.filepath = _relative(path)
         image.colorspace_settings.name = "Non-Color"
         image.alpha_mode = "CHANNEL_PACKED"
         if pack:
             image.pack()
         images.append(image)
-    return images, created
+    return images
 
 
 def summarize(report, seconds, lobes):
@@ -448,14 +530,14 @@ def finish(job):
         atlas = nodes.AtlasLayout(width=layout["width"], height=layout["height"], levels=layout["levels"])
 
     old = material_scan.record(material)
-    old_images = []
-    if old:
+    if old:  # its nodes and images go now; its folder when the .blend is saved (Ctrl-Z keeps it)
+        _track(record_folder(old))
         _remove_nodes(material, old)
-        old_images = old.get("images", [])
+        _remove_images(old.get("images", []))
 
     targets, images, created = [], [], []
     try:
-        images, created = _load_lobe_images(material.name, paths, job.settings.pack)
+        images = _load_lobe_images(material.name, paths, job.settings.pack, created)
         for principled_name, normal_map_name, texture_name in job.targets:
             principled = tree.nodes[principled_name]
             normal_map = tree.nodes[normal_map_name]
@@ -472,23 +554,13 @@ def finish(job):
         # A bug, not bad input: put the material back as it was before any bake, drop this bake's
         # images and files, and say so (no half-built material is left behind).
         _remove_nodes(material, {"targets": targets})
-        _remove_images(sorted(set(created) | set(old_images)))
+        _remove_images(created)
         if RECORD_KEY in material.keys():
             del material[RECORD_KEY]
         _delete_bake_files(job.out_dir, os.listdir(job.out_dir))
         raise BakeError("INTERNAL", "building the node group of '%s' failed (%s: %s); the material is as it was "
                         "before baking" % (material.name, type(e).__name__, e)) from e
 
-    # Images of the previous bake that this one did not reuse (fewer lobes now).
-    keep = {im.name for im in images}
-    still_ours = [name for name in old_images if name in keep]
-    _remove_images([name for name in old_images if name not in keep])
-    # A previous bake in another folder (a copy's, shared with its original): its files go when
-    # no other material uses them.
-    if old and old.get("folder") and old["folder"] != job.folder:
-        old_folder = bpy.path.abspath(old["folder"])
-        if not folder_users(old_folder, but=material):
-            _delete_bake_files(old_folder, old.get("files", []))
 
     files = report.get("files") or sorted(os.listdir(job.out_dir))
     summary = summarize(report, job.seconds, len(images))
@@ -501,7 +573,7 @@ def finish(job):
         "version": RECORD_VERSION,
         "folder": job.folder,
         "files": [f for f in files if _is_bake_file(f)],
-        "images": sorted(set(created) | set(still_ours)),
+        "images": sorted(created),
         "targets": targets,
         "lobes": len(images),
         "packed": bool(job.settings.pack),
@@ -583,9 +655,9 @@ def _remove_images(names):
 
 
 def revert(material):
-    """Restores the material as it was before the bake and deletes the lobe files and their folder,
-    unless another material's bake uses them too (a copy of this material). Returns (files
-    removed, [files that could not be removed], [names of the materials that keep the folder])."""
+    """Restores the material as it was before the bake. Its lobe folder is deleted when the .blend
+    is next saved, unless a material still names it then (a copy, or this one after Ctrl-Z).
+    Returns (the folder, [names of the other materials that use it])."""
     rec = material_scan.record(material) if material is not None else None
     if rec is None:
         raise BakeError("NOT_BAKED", "material '%s' has no ndfbake bake to revert" % (
@@ -593,13 +665,12 @@ def revert(material):
     if material.library is not None:
         raise BakeError("LINKED_MATERIAL", "material '%s' is linked from %s: revert it in that file"
                         % (material.name, material.library.filepath))
+    folder = record_folder(rec)
     _remove_nodes(material, rec)
     _remove_images(rec.get("images", []))
-    folder = bpy.path.abspath(rec.get("folder", "")) if rec.get("folder") else ""
-    sharing = [m.name for m in folder_users(folder, but=material)] if folder else []
-    removed, left = _delete_bake_files(folder, rec.get("files", [])) if not sharing else (0, [])
     del material[RECORD_KEY]
-    return removed, left, sharing
+    _track(folder)
+    return folder, [m.name for m in folder_users(folder)] if folder else []
 
 
 def _delete_bake_files(folder, names):

@@ -8,7 +8,8 @@
 - ndfbake.bake_all: every material the scene needs (bake.materials_needing_bake); from a script,
   one after another on the calling thread; from the UI, modal like ndfbake.bake, every native bake
   into a pending folder and all finished together, so that Esc leaves every material as it was.
-- ndfbake.revert: undoes the bake of the active material (or `material=`).
+- ndfbake.revert: undoes the bake of the active material (or `material=`); the lobe textures are
+  deleted at the next save (bake.py explains why).
 Failures are reported as one ERROR line each; from Python, bpy.ops raises RuntimeError then.
 """
 import bpy
@@ -230,7 +231,7 @@ class NDFBAKE_OT_bake_all(_ModalBakes, bpy.types.Operator):
 class NDFBAKE_OT_revert(bpy.types.Operator):
     bl_idname = "ndfbake.revert"
     bl_label = "Revert"
-    bl_description = "Restore the material's original nodes and delete its lobe textures"
+    bl_description = "Restore the material's original nodes; its lobe textures are deleted when the .blend is saved"
     bl_options = {"REGISTER", "UNDO"}
 
     material: StringProperty(name="Material", description="Material to revert; empty: the active material")
@@ -238,17 +239,16 @@ class NDFBAKE_OT_revert(bpy.types.Operator):
     def execute(self, context):
         material = _material(context, self.material)
         try:
-            removed, left, kept_for = bake.revert(material)
+            folder, kept_for = bake.revert(material)
         except bake.BakeError as e:
             self.report({"ERROR"}, "ndfbake: " + e.message)
             return {"CANCELLED"}
-        if left:
-            self.report({"WARNING"}, "ndfbake: %s reverted; could not delete %s" % (material.name, ", ".join(left)))
-        elif kept_for:
+        if kept_for:
             self.report({"INFO"}, "ndfbake: %s reverted; its lobe textures stay, %s use%s them" % (
                 material.name, ", ".join(kept_for), "s" if len(kept_for) == 1 else ""))
         else:
-            self.report({"INFO"}, "ndfbake: %s reverted, %d files deleted" % (material.name, removed))
+            self.report({"INFO"}, "ndfbake: %s reverted; its lobe textures (%s) are deleted when the .blend is "
+                                  "saved" % (material.name, bpy.path.relpath(folder) if folder else "none"))
         return {"FINISHED"}
 
 

@@ -7,7 +7,7 @@ Cases: a material without a normal map; an image missing on disk; a packed image
 image; an 8-bit normal map whose Image datablock is sRGB (refused: see material_scan.py for why);
 an object-space Normal Map node; a read-only output folder (the .blend's folder made read-only;
 as root, permission bits do not bind, so the bake runs under an unprivileged effective uid); a file
-where the lobe folder should go; an unsaved .blend; a corrupt image file; a Normal Map fed by
+where the lobe folder would go (left alone: the bake takes the next folder name); an unsaved .blend; a corrupt image file; a Normal Map fed by
 something other than an Image Texture; two different normal-map images in one material; a
 material linked from a library .blend (Bake and Revert refuse it); an image with unsaved edits; a
 muted Normal Map node; a mesh whose UVs are not finite (the level of detail cannot be measured).
@@ -140,10 +140,15 @@ def test_read_only_output_folder():
 
 def test_file_in_place_of_the_output_folder():
     def run(directory):
+        from ndfbake import bake
         material = h.baked_scene(directory)
-        with open(os.path.join(directory, "Bumpy.ndfbake"), "w") as f:
+        in_the_way = os.path.join(directory, "Bumpy.ndfbake")
+        with open(in_the_way, "w") as f:
             f.write("not a folder")
-        expect_refused(material, "OUTPUT_NOT_WRITABLE", ["Bumpy.ndfbake", "in the way"], directory)
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        h.expect(result.folder == "//Bumpy~2.ndfbake", "baked into %s" % result.folder)
+        with open(in_the_way) as f:
+            h.expect(f.read() == "not a folder", "the file in the way changed")
     _case(run)
 
 

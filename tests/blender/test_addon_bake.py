@@ -7,8 +7,10 @@ The scene: a plane whose material reads a 64² PNG normal map written by the lib
 saved as a .blend in a temporary folder.
 - A bake adds exactly one node (the group) and rewires only the Principled BSDF's output; the
   lobe textures land in //<material>.ndfbake/ with relative paths.
-- Revert restores every node, link, socket value and property exactly (full dump compared), the
-  data-blocks as they were, and deletes the files and the folder.
+- Revert restores every node, link, socket value and property exactly (full dump compared) and
+  the data-blocks as they were; the files and the folder go at the next save.
+- Ctrl-Z after a re-bake and after a Revert gives back a material whose lobe images load (their
+  folders stay until a save finds no material naming them).
 - The operators work in the background; re-baking with fewer lobes emits a one-lobe group and
   drops the surplus textures; bake + save + reopen keeps working and reverts; bake_all bakes only
   what the scene renders; linked Principled inputs are carried over; packing works.
@@ -21,6 +23,11 @@ import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import test_addon_helpers as h  # noqa: E402
+
+
+def _record(material):
+    from ndfbake import material_scan
+    return material_scan.record(material)
 
 
 def _group_nodes(material):
@@ -85,9 +92,11 @@ def test_bake_adds_only_the_group_and_bypass():
             h.expect(image.alpha_mode == "CHANNEL_PACKED", "alpha mode")
             h.expect(image.has_data or image.size[0] > 0, "image %d did not load" % j)
 
-        removed, left, kept_for = bake.revert(material)
-        h.expect(not left and not kept_for and removed == len(files),
-                 "revert removed %d of %d files (%s; kept for %s)" % (removed, len(files), left, kept_for))
+        reverted_folder, kept_for = bake.revert(material)
+        h.expect(reverted_folder == folder and not kept_for, "revert: %s, kept for %s" % (reverted_folder, kept_for))
+        h.expect(sorted(os.listdir(folder)) == files, "revert deleted files before the save")
+        bpy.ops.wm.save_mainfile()
+        h.expect(not os.path.exists(folder), "the save left the reverted folder: %s" % h.listing(directory))
         restored = h.dump_material(material)
         for name in set(before["nodes"]) | set(restored["nodes"]):
             h.expect(before["nodes"].get(name) == restored["nodes"].get(name), "node %s differs after revert:\n%s\n%s"
@@ -95,7 +104,8 @@ def test_bake_adds_only_the_group_and_bypass():
         h.expect(restored == before, "material differs after revert")
         h.expect(h.data_counts() == data_before, "data-blocks differ after revert: %s vs %s"
                  % (h.data_counts(), data_before))
-        h.expect(h.listing(directory) == files_before, "files after revert: %s" % h.listing(directory))
+        h.expect([f for f in h.listing(directory) if f != "scene.blend1"] == files_before,
+                 "files after revert and save: %s" % h.listing(directory))
     finally:
         h.cleanup(directory)
 
@@ -119,8 +129,11 @@ def test_operators_rebake_fewer_lobes_and_revert():
         tree = groups[0].node_tree
         h.expect(_principled_count(tree) == 1, "one-lobe group expected")
         h.expect(not any(n.bl_idname == "ShaderNodeMixShader" for n in tree.nodes), "a one-lobe group mixes nothing")
-        files = sorted(os.listdir(os.path.join(directory, "Bumpy.ndfbake")))
-        h.expect("level00_lobe1.exr" not in files, "surplus lobe files kept: %s" % files)
+        rebaked = bpy.path.abspath(_record(material)["folder"])
+        h.expect(os.path.basename(rebaked) == "Bumpy~2.ndfbake", "re-baked into %s" % rebaked)
+        files = sorted(os.listdir(rebaked))
+        h.expect("level00_lobe1.exr" not in files, "surplus lobe files in the new folder: %s" % files)
+        h.expect(os.path.isdir(os.path.join(directory, "Bumpy.ndfbake")), "the previous bake's folder went before a save")
         h.expect("Bumpy lobe 1" not in bpy.data.images, "surplus lobe image kept")
         h.expect(len([g for g in bpy.data.node_groups if g.name.startswith("NDFB Bumpy")]) == 1,
                  "old material groups kept: %s" % [g.name for g in bpy.data.node_groups])
@@ -135,7 +148,9 @@ def test_operators_rebake_fewer_lobes_and_revert():
         h.expect(bpy.ops.ndfbake.revert(material="Bumpy") == {"FINISHED"}, "revert operator")
         h.expect(h.dump_material(material) == before, "material differs after revert")
         h.expect(h.data_counts() == data_before, "data-blocks differ after revert")
-        h.expect(not os.path.exists(os.path.join(directory, "Bumpy.ndfbake")), "folder left")
+        bpy.ops.wm.save_mainfile()
+        h.expect(not [f for f in os.listdir(directory) if f.endswith(".ndfbake")],
+                 "lobe folders left after the save: %s" % os.listdir(directory))
         try:
             bpy.ops.ndfbake.revert(material="Bumpy")
             raise AssertionError("reverting an unbaked material must fail")
@@ -163,7 +178,8 @@ def test_save_reopen_then_revert():
         bake.revert(material)
         h.expect(h.dump_material(material) == before, "material differs after revert in the reopened file")
         h.expect(not any(i.name.startswith("Bumpy lobe") for i in bpy.data.images), "lobe images left")
-        h.expect(not os.path.exists(os.path.join(directory, "Bumpy.ndfbake")), "folder left")
+        bpy.ops.wm.save_mainfile()
+        h.expect(not os.path.exists(os.path.join(directory, "Bumpy.ndfbake")), "folder left after the save")
     finally:
         h.cleanup(directory)
 
@@ -309,7 +325,9 @@ def test_failure_while_building_nodes_rolls_back():
             nodes._wire_group_node = original
         h.expect(h.dump_material(material) == before, "a half-built material was left")
         h.expect(h.data_counts() == data_before, "data-blocks left: %s" % h.data_counts())
-        h.expect(h.listing(directory) == files_before, "files left: %s" % h.listing(directory))
+        bpy.ops.wm.save_mainfile()  # the first bake's folder, no longer named, goes at the save
+        h.expect([f for f in h.listing(directory) if f != "scene.blend1"] == files_before,
+                 "files left after the save: %s" % h.listing(directory))
     finally:
         h.cleanup(directory)
 

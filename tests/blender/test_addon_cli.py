@@ -6,7 +6,8 @@ A .blend with two rendered materials, "Good" (a PNG normal map) and "Bad" (its n
 Space is sRGB), and an unrendered "Hidden" one. The script runs in a separate `blender -b`:
 - baking everything the scene needs exits 1, prints the baked material's report and the other's
   specific failure, saves the file: Good is baked, Bad and Hidden are exactly as they were;
-- naming Good alone exits 0; --revert restores Good exactly and deletes its folder;
+- naming Good alone exits 0 (a new folder; the save deletes the replaced one); --revert restores
+  Good exactly and its save deletes the folder;
 - an unknown material exits 2, changing nothing.
 """
 import os
@@ -53,13 +54,15 @@ def test_command_line_bake_and_revert():
 
         code, out = h.run_bake_blend(blend, "--material", "Good", "--max-lobes", "1")
         h.expect(code == 0, "re-bake of Good: exit %d\n%s" % (code, out))
-        h.expect("baked Good into //Good.ndfbake: 1 lobe," in out, out)
+        h.expect("baked Good into //Good~2.ndfbake: 1 lobe," in out, out)
+        h.expect(not os.path.exists(os.path.join(directory, "Good.ndfbake")), "the save left the replaced folder")
 
         code, out = h.run_bake_blend(blend, "--revert")
         h.expect(code == 0, "revert: exit %d\n%s" % (code, out))
         h.expect("reverted Good" in out, out)
         h.expect(reopen(blend) == original, "the reverted file differs from the original")
-        h.expect(not os.path.exists(os.path.join(directory, "Good.ndfbake")), "lobe folder left")
+        h.expect(not [f for f in os.listdir(directory) if f.endswith(".ndfbake")], "lobe folder left: %s"
+                 % os.listdir(directory))
 
         mtime = os.path.getmtime(blend)
         code, out = h.run_bake_blend(blend, "--material", "Nope")

@@ -5,14 +5,18 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 
 - Names that safe_name maps to one folder ("Metal 01", "Metal_01") and names that differ only in
   case get folders of their own; reverting one leaves the other's files and images intact.
-- A copy of a baked material (Shift+D copies the bake record): reverting the copy keeps the
-  original's files; re-baking the copy moves it to a folder of its own; reverting the original
-  then deletes its folder.
+- A copy of a baked material (Shift+D copies the bake record): reverting the copy (and saving)
+  keeps the original's files; re-baking the copy gives it a folder of its own; reverting the
+  original then deletes its folder at the save.
 - A re-bake whose material changed while the library ran (MATERIAL_CHANGED) leaves the previous
   bake's files, images and nodes as they were, and no pending folder.
 - A Mix Shader the user put after the group node stays after Revert (fed by the Principled again)
   and after a re-bake (fed by the new group).
 - Box projection bakes level 0 for the renderer to filter, with a camera in the scene.
+- Ctrl-Z after a re-bake and after a Revert gives back a material whose lobe images load; the
+  next save deletes only the folders no material names (here the undone re-bake's).
+- Save As into another folder keeps the lobe folder the moved .blend's images use, and a Revert
+  there releases that folder (not one of the same name beside the new .blend).
 """
 import os
 import sys
@@ -55,8 +59,10 @@ def test_names_that_clash_on_disk_get_folders_of_their_own():
         h.expect(folders[0].startswith("//Metal_01~") and folders[2].startswith("//metal_01~"),
                  "hashed folders: %s" % folders)
         kept = {r.material: _lobe_files(bpy.path.abspath(r.folder)) for r in results}
-        removed, left, kept_for = bake.revert(first)
-        h.expect(removed > 0 and not left and not kept_for, "revert: %d removed, %s, %s" % (removed, left, kept_for))
+        reverted, kept_for = bake.revert(first)
+        bpy.ops.wm.save_mainfile()
+        h.expect(not os.path.exists(reverted) and not kept_for, "revert and save: %s left, kept for %s"
+                 % (reverted, kept_for))
         for material in others:
             folder = bpy.path.abspath(material_scan.record(material)["folder"])
             h.expect(_lobe_files(folder) == kept[material.name], "%s lost files" % material.name)
@@ -75,9 +81,9 @@ def test_a_copy_shares_the_folder_until_it_is_baked_itself():
         files = _lobe_files(folder)
         copy = original.copy()
         h.expect(copy.name == "Bumpy.001" and bake.is_baked(copy), "the copy has the bake record")
-        removed, left, kept_for = bake.revert(copy)
-        h.expect(removed == 0 and kept_for == ["Bumpy"], "revert of the copy: %d removed, kept for %s"
-                 % (removed, kept_for))
+        reverted, kept_for = bake.revert(copy)
+        h.expect(kept_for == ["Bumpy"], "revert of the copy: kept for %s" % kept_for)
+        bpy.ops.wm.save_mainfile()
         h.expect(_lobe_files(folder) == files and bake.is_baked(original), "the original lost its bake")
         _images_load(original)
 
@@ -87,10 +93,10 @@ def test_a_copy_shares_the_folder_until_it_is_baked_itself():
         h.expect(_lobe_files(folder) == files, "re-baking the copy changed the original's files")
         _images_load(original)
         _images_load(copy)
-        removed, left, kept_for = bake.revert(original)
-        h.expect(removed == len(files) + 1 and not kept_for, "revert of the original: %d removed, kept for %s"
-                 % (removed, kept_for))
-        h.expect(not os.path.exists(folder), "the original's folder is left")
+        reverted, kept_for = bake.revert(original)
+        h.expect(not kept_for, "revert of the original: kept for %s" % kept_for)
+        bpy.ops.wm.save_mainfile()
+        h.expect(not os.path.exists(folder), "the original's folder is left after the save")
         _images_load(copy)
     finally:
         h.cleanup(directory)
@@ -171,10 +177,68 @@ def test_box_projection_leaves_filtering_to_the_renderer():
         h.cleanup(directory)
 
 
+def test_undo_after_rebake_and_revert_finds_the_files():
+    from ndfbake import bake, material_scan
+    directory = h.temp_dir()
+    try:
+        h.baked_scene(directory)
+        # The undo steps a window pushes after each operator with the UNDO flag (`blender -b`
+        # pushes none by itself).
+        bpy.ops.ed.undo_push(message="ndfbake test scene")
+        h.expect(bpy.ops.ndfbake.bake(material="Bumpy") == {"FINISHED"}, "bake")
+        bpy.data.materials["Bumpy"].ndfbake_settings.max_lobes = 1
+        bpy.ops.ed.undo_push(message="Bake")
+        first = material_scan.record(bpy.data.materials["Bumpy"])["folder"]
+        h.expect(bpy.ops.ndfbake.bake(material="Bumpy") == {"FINISHED"}, "re-bake")
+        bpy.ops.ed.undo_push(message="Bake")
+        second = material_scan.record(bpy.data.materials["Bumpy"])["folder"]
+        h.expect(first != second, "the re-bake wrote into the first bake's folder %s" % first)
+
+        h.expect(bpy.ops.ed.undo() == {"FINISHED"}, "Ctrl-Z after the re-bake")
+        material = bpy.data.materials["Bumpy"]
+        rec = material_scan.record(material)
+        h.expect(rec and rec["folder"] == first and rec["lobes"] == 4, "Ctrl-Z did not bring back the first bake")
+        h.expect(len(_images_load(material)) == 4, "the first bake's images")
+
+        h.expect(bpy.ops.ndfbake.revert(material="Bumpy") == {"FINISHED"}, "revert")
+        bpy.ops.ed.undo_push(message="Revert")
+        h.expect(bpy.ops.ed.undo() == {"FINISHED"}, "Ctrl-Z after the revert")
+        material = bpy.data.materials["Bumpy"]
+        h.expect(bake.is_baked(material) and len(_images_load(material)) == 4, "Ctrl-Z after the revert")
+
+        bpy.ops.wm.save_mainfile()
+        folders = sorted(f for f in os.listdir(directory) if f.endswith(".ndfbake"))
+        h.expect(folders == [first[2:]], "after the save: %s (only %s is named by a material)" % (folders, first))
+    finally:
+        h.cleanup(directory)
+
+
+def test_save_as_elsewhere_keeps_the_textures_it_uses():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        os.makedirs(os.path.join(directory, "moved"))
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "moved", "scene.blend"))
+        folder = os.path.join(directory, "Bumpy.ndfbake")
+        h.expect(os.path.isdir(folder), "Save As deleted the folder the moved .blend's images use")
+        material = bpy.data.materials["Bumpy"]
+        _images_load(material)
+        reverted, _ = bake.revert(material)
+        h.expect(os.path.normpath(reverted) == folder, "revert released %s, not %s" % (reverted, folder))
+        bpy.ops.wm.save_mainfile()
+        h.expect(not os.path.exists(folder), "the reverted folder is left after the save")
+    finally:
+        h.cleanup(directory)
+
+
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_names_that_clash_on_disk_get_folders_of_their_own,
            test_a_copy_shares_the_folder_until_it_is_baked_itself,
            test_a_rebake_that_fails_keeps_the_previous_bake,
            test_revert_and_rebake_keep_a_mix_shader_added_after_the_bake,
-           test_box_projection_leaves_filtering_to_the_renderer])
+           test_box_projection_leaves_filtering_to_the_renderer,
+           test_undo_after_rebake_and_revert_finds_the_files,
+           test_save_as_elsewhere_keeps_the_textures_it_uses])
