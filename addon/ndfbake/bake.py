@@ -246,15 +246,19 @@ PENDING_SUFFIX = ".pending"
 
 def _plan_lod(material, scan, settings):
     """The scene's level of detail for the material (scene_lod.plan), or None: level 0 filtered
-    by the renderer."""
+    by the renderer; and why not, where the material asked for the scene's."""
     if settings.level_of_detail != "SCENE":
-        return None
+        return None, ""
     tree = material.node_tree
-    if any(tree.nodes[t.image_texture].projection != "FLAT" for t in scan.targets):
-        return None  # the atlas lookup needs UVs: box/sphere/tube projection keeps the renderer's
+    textures = [tree.nodes[t.image_texture] for t in scan.targets]
+    if any(t.projection != "FLAT" for t in textures):
+        return None, "its texture has %s projection" % textures[0].projection.lower()
+    repeats = {scene_lod.texture_repeat(t) for t in textures}
+    if None in repeats or len(repeats) > 1:
+        return None, "its texture coordinates do not come from a UV map (through Mapping nodes)"
     uv_map = tree.nodes[scan.targets[0].normal_map].uv_map
     try:
-        return scene_lod.plan(bpy.context.scene, material, tuple(scan.image.size), uv_map)
+        return scene_lod.plan(bpy.context.scene, material, tuple(scan.image.size), uv_map, repeats.pop()), ""
     except native.Error as e:
         raise BakeError("BAD_MESH", "cannot measure the texel density of the meshes using '%s' (%s): fix the mesh, "
                                     "or set Level of Detail to Renderer" % (material.name, e.message)) from None
@@ -282,12 +286,13 @@ def prepare(material, settings=None):
                         % material.name)
     if settings.level_of_detail not in ("SCENE", "RENDERER"):
         raise BakeError("BAD_SETTINGS", "level of detail must be SCENE or RENDERER, got %r" % settings.level_of_detail)
+    lod, lod_note = _plan_lod(material, scan, settings)
     return BakeJob(material_name=material.name, image_path=scan.image_path, folder=relative,
                    out_dir=absolute + PENDING_SUFFIX, final_dir=absolute,
                    wrap=native.WRAP_REPEAT if scan.wrap == "REPEAT" else native.WRAP_CLAMP,
                    roughness=min(max(scan.roughness, 0.01), 1.0), settings=settings,
                    targets=[(t.principled, t.normal_map, t.image_texture) for t in scan.targets],
-                   lod=_plan_lod(material, scan, settings))
+                   lod=lod, lod_note=lod_note)
 
 
 
@@ -298,7 +303,7 @@ class BakeJob:
     a modal operator drive it from Blender's main thread."""
 
     def __init__(self, material_name, image_path, folder, out_dir, final_dir, wrap, roughness, settings, targets,
-                 lod=None):
+                 lod=None, lod_note=""):
         self.material_name = material_name
         self.image_path = image_path
         self.folder = folder
@@ -309,6 +314,7 @@ class BakeJob:
         self.settings = settings
         self.targets = targets
         self.lod = lod           # scene_lod.LodPlan, or None: level 0 filtered by the renderer
+        self.lod_note = lod_note  # why not the scene's level of detail, where it was asked for
         self.stage = ""
         self.fraction = 0.0
         self.seconds = 0.0
@@ -561,14 +567,13 @@ def finish(job):
         raise BakeError("INTERNAL", "building the node group of '%s' failed (%s: %s); the material is as it was "
                         "before baking" % (material.name, type(e).__name__, e)) from e
 
-
     files = report.get("files") or sorted(os.listdir(job.out_dir))
     summary = summarize(report, job.seconds, len(images))
     if job.lod is not None:
         summary += "; level of detail from the camera (%.1f texels per unit, largest footprint %.0f texels)" % (
             job.lod.texels_per_unit, job.lod.footprint_max)
     else:
-        summary += "; level 0 filtered by the renderer"
+        summary += "; level 0 filtered by the renderer" + (" (%s)" % job.lod_note if job.lod_note else "")
     rec = {
         "version": RECORD_VERSION,
         "folder": job.folder,

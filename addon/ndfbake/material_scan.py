@@ -74,7 +74,7 @@ class ScanResult:
         return self.problems[0] if self.problems else None
 
 
-def _upstream(socket):
+def upstream(socket):
     """The node and output socket feeding `socket`, through reroutes; (None, None) if unlinked."""
     seen = set()
     while socket is not None and socket.is_linked:
@@ -190,9 +190,9 @@ def scan(material):
 
     normal_maps, muted = [], []
     for p in principled:
-        node, _ = _upstream(p.inputs["Normal"])
+        node, _ = upstream(p.inputs["Normal"])
         if node is not None and node.bl_idname == "ShaderNodeNormalMap":
-            texture, _ = _upstream(node.inputs["Color"])
+            texture, _ = upstream(node.inputs["Color"])
             if node.mute or (texture is not None and texture.mute):
                 muted.append(node.name if node.mute else texture.name)
             else:
@@ -210,7 +210,7 @@ def scan(material):
                 "NOT_TANGENT_SPACE", "Normal Map node '%s' is set to %s: ndfbake filters tangent-space normal "
                                      "maps only" % (nm.name, nm.bl_rna.properties["space"].enum_items[nm.space].name)))
             return result
-        tex, out = _upstream(nm.inputs["Color"])
+        tex, out = upstream(nm.inputs["Color"])
         if tex is None or tex.bl_idname != "ShaderNodeTexImage" or out.name != "Color":
             result.problems.append(Problem(
                 "NO_IMAGE_TEXTURE", "Normal Map node '%s' does not take its Color from an Image Texture node" % nm.name))

@@ -21,6 +21,11 @@ axes, gave the same image errors on the demo scene at 128×72.)
 The same formula over the vertices of every object that renders the material, seen from every
 camera in the scene, gives the levels the bake must fit: up to the ceiling of the largest level
 plus one for the blend between two levels.
+
+A Mapping node between the UV map and the texture (tiling) scales texels_per_unit by how often
+the texture repeats per unit of UV (texture_repeat). Where the texture coordinates come from
+anything else (Generated, Object, math nodes) the density is unknown, and the bake leaves the
+level of detail to the renderer.
 """
 import math
 from dataclasses import dataclass
@@ -28,7 +33,7 @@ from dataclasses import dataclass
 import bpy
 import numpy as np
 
-from . import native
+from . import material_scan, native
 
 # Grazing views stretch the footprint without bound; past 1/64 (an 89° view) the stretch is
 # capped (at 64×, six levels, with STRETCH = 1) so that silhouettes keep some detail.
@@ -183,12 +188,36 @@ def footprints(positions, normals, camera, texels_per_unit):
     return footprint / np.maximum(facing, MIN_FACING) ** STRETCH
 
 
+def texture_repeat(texture):
+    """How many times the image texture node's image repeats per unit of the mesh's UV map: 1 for
+    the UV map itself (Vector unlinked, a UV Map node, Texture Coordinate's UV), times the
+    geometric mean of the x and y scale of each Mapping node on the way (divided for a Texture-type
+    mapping, which moves the texture instead of the coordinates); None where that cannot be known
+    from the nodes (other coordinates, a linked scale, math)."""
+    node, output = material_scan.upstream(texture.inputs["Vector"])
+    repeat = 1.0
+    while node is not None and node.bl_idname == "ShaderNodeMapping":
+        if node.vector_type not in ("POINT", "TEXTURE") or node.inputs["Scale"].is_linked:
+            return None
+        sx, sy = node.inputs["Scale"].default_value[:2]
+        scale = math.sqrt(abs(sx * sy))
+        if not scale > 0.0 or not node.inputs["Vector"].is_linked:
+            return None
+        repeat *= scale if node.vector_type == "POINT" else 1.0 / scale
+        node, output = material_scan.upstream(node.inputs["Vector"])
+    if node is None or node.bl_idname == "ShaderNodeUVMap" or (
+            node.bl_idname == "ShaderNodeTexCoord" and output.name == "UV"):
+        return repeat
+    return None
+
+
 def level_count(width, height):
     return int(math.floor(math.log2(max(width, height, 1)))) + 1
 
 
-def material_lod(scene, material, image_size, uv_map=""):
-    """Texel density and the levels the scene's cameras reach, for a map of image_size (w, h)."""
+def material_lod(scene, material, image_size, uv_map="", repeat=1.0):
+    """Texel density and the levels the scene's cameras reach, for a map of image_size (w, h)
+    repeating `repeat` times per unit of UV (texture_repeat)."""
     depsgraph = bpy.context.evaluated_depsgraph_get()
     meshes = [m for m in (_world_mesh(obj, depsgraph, uv_map) for obj in objects_using(scene, material)) if m]
     side = math.sqrt(max(1, image_size[0]) * max(1, image_size[1]))
@@ -198,7 +227,7 @@ def material_lod(scene, material, image_size, uv_map=""):
         return MaterialLod(texels_per_unit=0.0, levels=all_levels, footprint_max=float("nan"))
     # One density per material: the node group sees no object; weight each mesh by its area.
     uv_per_unit = sum(m.density * m.area for m in meshes) / area
-    texels_per_unit = uv_per_unit * side
+    texels_per_unit = uv_per_unit * side * repeat
     cameras = scene_cameras(scene)
     if not cameras:
         return MaterialLod(texels_per_unit, all_levels, float("nan"))
@@ -209,12 +238,12 @@ def material_lod(scene, material, image_size, uv_map=""):
     return MaterialLod(texels_per_unit, max(1, min(all_levels, needed)), largest)
 
 
-def plan(scene, material, image_size, uv_map=""):
+def plan(scene, material, image_size, uv_map="", repeat=1.0):
     """The LodPlan of `material` for its scene's active camera, or None where the scene gives no
     level of detail (no camera, or no rendered object with UV area uses the material)."""
     if scene.camera is None or scene.camera.type != "CAMERA":
         return None
-    needs = material_lod(scene, material, image_size, uv_map)
+    needs = material_lod(scene, material, image_size, uv_map, repeat)
     if needs.texels_per_unit <= 0.0:
         return None
     camera = camera_footprint(scene, scene.camera)

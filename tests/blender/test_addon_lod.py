@@ -11,6 +11,8 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
   own bilinear (Linear) lookup of the level's file renders, with repeat across tile borders.
 - A bake with a camera writes only the levels the camera reaches, and one atlas per lobe; the
   group's pixel angle follows the lens and the resolution through drivers; revert removes them.
+- A Mapping node that tiles the texture 4x (Point) or 2x (Texture type, scale 0.5) multiplies the
+  texel density by 4 (2); coordinates from elsewhere (Object) leave level 0 to the renderer.
 """
 import math
 import os
@@ -263,10 +265,39 @@ def test_a_bake_with_a_camera_writes_only_the_levels_it_reaches():
         h.cleanup(directory)
 
 
+def test_a_mapping_node_scales_the_texel_density():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory, pattern="fbm", size=128)
+        _resolution(64, 64)
+        _camera(location=(0.0, 0.0, 6.0), lens=50.0)
+        tree = material.node_tree
+        coords, mapping = tree.nodes.new("ShaderNodeTexCoord"), tree.nodes.new("ShaderNodeMapping")
+        tree.links.new(coords.outputs["UV"], mapping.inputs["Vector"])
+        tree.links.new(mapping.outputs["Vector"], tree.nodes["Normal Texture"].inputs["Vector"])
+        for vector_type, scale, expected in (("POINT", 4.0, 256.0), ("TEXTURE", 0.5, 128.0)):
+            mapping.vector_type = vector_type
+            mapping.inputs["Scale"].default_value = (scale, scale, 1.0)
+            bpy.ops.wm.save_mainfile()
+            result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+            density = tree.nodes["ndfbake"].inputs["Texels per Unit"].default_value
+            print("  %s scale %g: %.2f texels per unit" % (vector_type, scale, density))
+            h.expect(abs(density - expected) < 0.05, "%s scale %g: texel density %.3f, expected %g (64 untiled)"
+                     % (vector_type, scale, density, expected))
+        tree.links.new(coords.outputs["Object"], mapping.inputs["Vector"])
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        h.expect("level 0 filtered by the renderer (its texture coordinates do not come from a UV map" in result.summary,
+                 result.summary)
+    finally:
+        h.cleanup(directory)
+
+
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_camera_footprint_is_the_pinhole_pixel_angle,
            test_material_lod_measures_texel_density_and_the_levels_reached,
            test_the_level_of_detail_group_renders_the_footprint_formula,
            test_atlas_lookups_equal_bilinear_filtering_of_the_level_files,
-           test_a_bake_with_a_camera_writes_only_the_levels_it_reaches])
+           test_a_bake_with_a_camera_writes_only_the_levels_it_reaches,
+           test_a_mapping_node_scales_the_texel_density])
