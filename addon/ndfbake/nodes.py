@@ -643,15 +643,49 @@ def drive_lod_inputs(node, scene, camera_object):
         var.targets[0].data_path = path
 
 
-def _remove_drivers(material_tree, node_name):
-    """Drops the drivers of the named node's inputs; and the tree's animation data when nothing
-    else is left in it (the add-on created it)."""
+def _input_path(node, index):
+    return 'nodes["%s"].inputs[%d].default_value' % (bpy.utils.escape_identifier(node.name), index)
+
+
+def carry_animation(material_tree, principled, node):
+    """Copies the keyframes (of the tree's action) and drivers of the Principled's unlinked inputs
+    to the group node's inputs of the same name, which hold those values after the bake: an
+    animated colour or emission goes on animating."""
     animation = material_tree.animation_data
     if animation is None:
         return
-    prefix = 'nodes["%s"]' % node_name
+    targets = {}
+    for i, socket in enumerate(principled.inputs):
+        j = node.inputs.find(socket.name)
+        if j >= 0 and not socket.is_linked:
+            targets[_input_path(principled, i)] = _input_path(node, j)
+    action = animation.action
+    for source in [f for f in action.fcurves if f.data_path in targets] if action else []:
+        copy = action.fcurves.new(targets[source.data_path], index=source.array_index,
+                                  action_group=source.group.name if source.group else "")
+        copy.extrapolation = source.extrapolation
+        copy.keyframe_points.add(len(source.keyframe_points))
+        for key, original in zip(copy.keyframe_points, source.keyframe_points):
+            for attribute in ("co", "handle_left", "handle_right", "handle_left_type", "handle_right_type",
+                              "interpolation", "easing", "amplitude", "back", "period"):
+                setattr(key, attribute, getattr(original, attribute))
+        copy.update()
+    for source in [f for f in animation.drivers if f.data_path in targets]:
+        animation.drivers.from_existing(src_driver=source).data_path = targets[source.data_path]
+
+
+def _remove_animation(material_tree, node_name):
+    """Drops the drivers and keyframes of the named node's inputs; and the tree's animation data
+    when nothing else is left in it (the add-on created it)."""
+    animation = material_tree.animation_data
+    if animation is None:
+        return
+    prefix = 'nodes["%s"]' % bpy.utils.escape_identifier(node_name)
     for fcurve in [f for f in animation.drivers if f.data_path.startswith(prefix)]:
         animation.drivers.remove(fcurve)
+    if animation.action is not None:
+        for fcurve in [f for f in animation.action.fcurves if f.data_path.startswith(prefix)]:
+            animation.action.fcurves.remove(fcurve)
     if not animation.drivers and animation.action is None and not animation.nla_tracks:
         material_tree.animation_data_clear()
 
@@ -667,6 +701,7 @@ def insert_group_node(material_tree, group_tree, principled, normal_map, image_t
     bypassed = []
     try:
         _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture, bypassed)
+        carry_animation(material_tree, principled, node)
         return node, bypassed, add_eevee_output(material_tree, node, bypassed)
     except Exception:
         remove_group_node(material_tree, node.name, principled.name, bypassed)
@@ -760,7 +795,7 @@ def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee
     node = nodes.get(node_name)
     principled = nodes.get(principled_name)
     group_tree = node.node_tree if node is not None else None
-    _remove_drivers(material_tree, node_name)
+    _remove_animation(material_tree, node_name)
     if node is not None:
         leaving = [link for output in node.outputs if output.type == "SHADER" for link in output.links]
         targets = [(link.to_socket, link.is_muted) for link in leaving]

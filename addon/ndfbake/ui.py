@@ -92,6 +92,8 @@ class NDFBAKE_PT_material(bpy.types.Panel):
             rec = material_scan.record(material)
             _wrapped(layout.box(), "Baked into %s: %s" % (rec.get("folder", ""), rec.get("summary", "")),
                      icon="CHECKMARK")
+            _wrapped(layout, "The ndfbake node now holds the material's inputs (colour, roughness, ...): edit "
+                             "them there; the original Principled BSDF is kept, bypassed, for Revert.", icon="INFO")
         _wrapped(layout, nodes.osl_status()[1], icon="INFO")
 
 

@@ -13,7 +13,8 @@ saved as a .blend in a temporary folder.
   folders stay until a save finds no material naming them).
 - The operators work in the background; re-baking with fewer lobes emits a one-lobe group and
   drops the surplus textures; bake + save + reopen keeps working and reverts; bake_all bakes only
-  what the scene renders; linked Principled inputs are carried over; packing works.
+  what the scene renders; linked Principled inputs are carried over; packing works; keyframes and
+  drivers on the Principled's inputs move to the group node's and go again on Revert.
 """
 import os
 import re
@@ -332,9 +333,43 @@ def test_failure_while_building_nodes_rolls_back():
         h.cleanup(directory)
 
 
+def test_animated_inputs_keep_animating():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        tree = material.node_tree
+        principled = tree.nodes["Principled BSDF"]
+        strength = principled.inputs["Emission Strength"]
+        for frame, value in ((1, 0.0), (11, 10.0)):
+            strength.default_value = value
+            strength.keyframe_insert("default_value", frame=frame)
+        driver = principled.inputs["Metallic"].driver_add("default_value").driver
+        driver.type = "SCRIPTED"
+        driver.expression = "0.25"
+        paths_before = sorted(f.data_path for f in tree.animation_data.action.fcurves)
+        drivers_before = sorted(f.data_path for f in tree.animation_data.drivers)
+        bpy.ops.wm.save_mainfile()
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        group = tree.nodes["ndfbake"]
+        scene = bpy.context.scene
+        for frame, expected in ((1, 0.0), (6, 5.0), (11, 10.0)):
+            scene.frame_set(frame)
+            value = group.inputs["Emission Strength"].default_value
+            h.expect(abs(value - expected) < 0.6, "Emission Strength at frame %d: %g, expected about %g"
+                     % (frame, value, expected))
+        h.expect(abs(group.inputs["Metallic"].default_value - 0.25) < 1e-6, "the driver on Metallic was not carried")
+        bake.revert(material)
+        h.expect(sorted(f.data_path for f in tree.animation_data.action.fcurves) == paths_before,
+                 "keyframes after revert: %s" % [f.data_path for f in tree.animation_data.action.fcurves])
+        h.expect(sorted(f.data_path for f in tree.animation_data.drivers) == drivers_before, "drivers after revert")
+    finally:
+        h.cleanup(directory)
+
+
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_bake_adds_only_the_group_and_bypass, test_failure_while_building_nodes_rolls_back,
            test_operators_rebake_fewer_lobes_and_revert, test_save_reopen_then_revert,
            test_bake_all_bakes_what_the_scene_renders, test_linked_inputs_are_carried_and_restored,
-           test_a_user_graph_downstream_gets_no_eevee_output, test_pack_option])
+           test_a_user_graph_downstream_gets_no_eevee_output, test_pack_option, test_animated_inputs_keep_animating])
