@@ -139,15 +139,34 @@ class _WorldMesh:
     area: float                  # world area
 
 
-def _world_mesh(obj, depsgraph, uv_map):
+def _material_faces(obj, material, count, attribute):
+    """Which of `count` faces (polygons or loop triangles, by their material_index) use `material`
+    (an index past the last slot uses the last slot, as Blender renders it)."""
+    slots = obj.material_slots
+    index = np.empty(count, dtype=np.int32)
+    attribute.foreach_get("material_index", index)
+    mine = np.array([slot.material == material for slot in slots] or [True])
+    return mine[np.clip(index, 0, len(mine) - 1)]
+
+
+def _uv_layer(mesh, uv_map):
+    """The UV map a Normal Map node reads: the named one, or with no name the one active for rendering."""
+    if uv_map:
+        return mesh.uv_layers.get(uv_map)
+    return next((layer for layer in mesh.uv_layers if layer.active_render), mesh.uv_layers.active)
+
+
+def _world_mesh(obj, depsgraph, uv_map, material):
+    """The faces of `obj` that render with `material`, in world space, with their texel density."""
     evaluated = obj.evaluated_get(depsgraph)
     mesh = evaluated.to_mesh()
     try:
         if mesh is None or not mesh.polygons or not mesh.uv_layers:
             return None
-        layer = mesh.uv_layers.get(uv_map) if uv_map else None
-        layer = layer or mesh.uv_layers.active
-        nv, nl, nf = len(mesh.vertices), len(mesh.loops), len(mesh.polygons)
+        layer = _uv_layer(mesh, uv_map) or mesh.uv_layers.active
+        nv, nl = len(mesh.vertices), len(mesh.loops)
+        faces = _material_faces(obj, material, len(mesh.polygons), mesh.polygons)
+        nf = len(mesh.polygons)
         co = np.empty(nv * 3, dtype=np.float32)
         mesh.vertices.foreach_get("co", co)
         vn = np.empty(nv * 3, dtype=np.float32)
@@ -156,7 +175,10 @@ def _world_mesh(obj, depsgraph, uv_map):
         mesh.polygons.foreach_get("loop_total", sizes)
         starts = np.empty(nf, dtype=np.int64)
         mesh.polygons.foreach_get("loop_start", starts)
-        order = np.concatenate([np.arange(s, s + t) for s, t in zip(starts, sizes)]) if nf else np.arange(0)
+        sizes, starts = sizes[faces], starts[faces]
+        if not len(sizes):
+            return None
+        order = np.concatenate([np.arange(s, s + t) for s, t in zip(starts, sizes)])
         corners = np.empty(nl, dtype=np.uint32)
         mesh.loops.foreach_get("vertex_index", corners)
         uvs = np.empty(nl * 2, dtype=np.float32)
@@ -172,9 +194,11 @@ def _world_mesh(obj, depsgraph, uv_map):
         mesh.calc_loop_triangles()
         tris = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int64)
         mesh.loop_triangles.foreach_get("vertices", tris)
-        tri = world[tris.reshape(-1, 3)]
+        tris = tris.reshape(-1, 3)[_material_faces(obj, material, len(mesh.loop_triangles), mesh.loop_triangles)]
+        tri = world[tris]
         area = 0.5 * float(np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum())
-        return _WorldMesh(world, normals, density, area)
+        used = np.unique(corners)  # the footprints: at the vertices of these faces only
+        return _WorldMesh(world[used], normals[used], density, area)
     finally:
         evaluated.to_mesh_clear()
 
@@ -219,7 +243,7 @@ def material_lod(scene, material, image_size, uv_map="", repeat=1.0):
     """Texel density and the levels the scene's cameras reach, for a map of image_size (w, h)
     repeating `repeat` times per unit of UV (texture_repeat)."""
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    meshes = [m for m in (_world_mesh(obj, depsgraph, uv_map) for obj in objects_using(scene, material)) if m]
+    meshes = [m for m in (_world_mesh(obj, depsgraph, uv_map, material) for obj in objects_using(scene, material)) if m]
     side = math.sqrt(max(1, image_size[0]) * max(1, image_size[1]))
     all_levels = level_count(*image_size)
     area = sum(m.area for m in meshes)

@@ -4,7 +4,9 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 
 - camera_footprint: the pixel angle of perspective cameras (both sensor fits) and the pixel size of
   orthographic ones, against the pinhole formula worked by hand.
-- material_lod: texel density of a plane with known UVs and the levels a camera reaches.
+- material_lod: texel density of a plane with known UVs and the levels a camera reaches; only the
+  faces that use the material count, on the UV map the Normal Map node names (or, with no name,
+  the one active for rendering).
 - The "NDFB Level of Detail" node group, rendered by Cycles as an emission, equals the footprint
   formula evaluated per pixel from the camera's intrinsics (independent of scene_lod's numpy).
 - The atlas path (table, taps, four Closest lookups, bilinear in nodes) renders exactly what Cycles'
@@ -293,6 +295,38 @@ def test_a_mapping_node_scales_the_texel_density():
         h.cleanup(directory)
 
 
+def test_texel_density_counts_only_the_material_faces_and_the_render_uv_map():
+    from ndfbake import scene_lod
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory, pattern="bumps", size=64)
+        other = bpy.data.materials.new("Other")
+        # Two 2x2 quads side by side: ours with UVs 0..1 (0.5 UV per unit), the other's 0..10.
+        mesh = bpy.data.meshes.new("Two")
+        mesh.from_pydata([(-2, -1, 0), (0, -1, 0), (0, 1, 0), (-2, 1, 0), (2, -1, 0), (2, 1, 0)], [],
+                         [(0, 1, 2, 3), (1, 4, 5, 2)])
+        render_uv, edit_uv = mesh.uv_layers.new(name="Render"), mesh.uv_layers.new(name="Edit")
+        square = [(0, 0), (1, 0), (1, 1), (0, 1)]
+        for face, scale in ((0, 1.0), (1, 10.0)):
+            for corner, loop in enumerate(mesh.polygons[face].loop_indices):
+                render_uv.data[loop].uv = [scale * c for c in square[corner]]
+                edit_uv.data[loop].uv = [2.0 * scale * c for c in square[corner]]
+        mesh.polygons[1].material_index = 1
+        render_uv.active_render, mesh.uv_layers.active = True, edit_uv
+        obj = bpy.data.objects.new("Two", mesh)
+        bpy.context.scene.collection.objects.link(obj)
+        obj.data.materials.append(material)
+        obj.data.materials.append(other)
+        bpy.data.objects["Plane"].hide_render = True
+        lod = scene_lod.material_lod(bpy.context.scene, material, (64, 64))
+        print("  texels per unit %.3f (the material's faces, the render UV map: 32)" % lod.texels_per_unit)
+        h.expect(abs(lod.texels_per_unit - 32.0) < 1e-3, "texel density %r, expected 32" % lod.texels_per_unit)
+        lod = scene_lod.material_lod(bpy.context.scene, material, (64, 64), uv_map="Edit")
+        h.expect(abs(lod.texels_per_unit - 64.0) < 1e-3, "named UV map: %r, expected 64" % lod.texels_per_unit)
+    finally:
+        h.cleanup(directory)
+
+
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_camera_footprint_is_the_pinhole_pixel_angle,
@@ -300,4 +334,5 @@ if __name__ == "__main__":
            test_the_level_of_detail_group_renders_the_footprint_formula,
            test_atlas_lookups_equal_bilinear_filtering_of_the_level_files,
            test_a_bake_with_a_camera_writes_only_the_levels_it_reaches,
-           test_a_mapping_node_scales_the_texel_density])
+           test_a_mapping_node_scales_the_texel_density,
+           test_texel_density_counts_only_the_material_faces_and_the_render_uv_map])
