@@ -8,8 +8,9 @@ Without --material it bakes every material the scene needs: those with a tangent
 map (Image Texture -> Normal Map -> Principled BSDF) on objects the scene renders. Each material's
 lobe textures go to //<material>.ndfbake/ beside the .blend. One line per material is printed,
 then a summary; the .blend is saved afterwards (its node groups refer to the textures by relative
-path) unless --no-save; saving deletes the lobe folders that re-bakes replaced. --revert undoes
-earlier bakes instead (nodes restored; the lobe folders deleted when the .blend is saved).
+path) unless --no-save; then the lobe folders that no saved .blend uses any more (replaced by a
+re-bake, reverted) are deleted. --revert undoes earlier bakes instead (nodes restored, folders
+deleted as just said).
 
 Exit status: 0 when every material succeeded; 1 when any failed (a failed material and its files
 are left exactly as they were; the others are still baked and saved); 2 for bad usage (unknown
@@ -103,7 +104,9 @@ def main():
             failures += 1
             print("FAILED %s [%s]: %s" % (material.name, e.code, e.message))
     if changed and not args.no_save:
-        bpy.ops.wm.save_mainfile()  # also deletes the lobe folders no material uses any more (bake.py)
+        bpy.ops.wm.save_mainfile()
+        # What closing the file does (also at exit): the lobe folders no saved .blend uses go.
+        addon.lobe_folders.delete_unused_folders()
     print("%s %d of %d materials in %.1f s%s" % ("reverted" if args.revert else "baked", changed, len(materials),
                                                time.perf_counter() - start,
                                                ", saved " + bpy.data.filepath if changed and not args.no_save else ""))

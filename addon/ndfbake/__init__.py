@@ -6,7 +6,8 @@ lives beside this file; see native.py for where else it is looked for. Registeri
 for want of the library: the panel then shows why it cannot be used.
 
 Modules: native (ctypes), material_scan (finds the normal map), scene_lod (what the scene's
-cameras need), nodes (node groups), bake (the work), operators and ui (thin skins). Scripts call bake.py, or the operators
+cameras need), nodes (node groups), lobe_folders (where the textures go, and when they are
+deleted), bake (the work), operators and ui (thin skins). Scripts call bake.py, or the operators
 bpy.ops.ndfbake.bake / bake_all / revert; examples/bake_blend.py is a command line.
 """
 
@@ -23,22 +24,23 @@ bl_info = {
 
 if "bpy" in locals():
     import importlib
-    for _module in (native, material_scan, scene_lod, nodes, bake, operators, ui):  # noqa: F821 (reload)
+    for _module in (native, material_scan, scene_lod, nodes, lobe_folders, bake, operators, ui):  # noqa: F821
         importlib.reload(_module)
 
 import bpy  # noqa: E402
 
-from . import bake, material_scan, native, nodes, operators, scene_lod, ui  # noqa: E402,F401
+from . import bake, lobe_folders, material_scan, native, nodes, operators, scene_lod, ui  # noqa: E402,F401
 
 
 def register():
+    lobe_folders.install_handlers()
     for cls in ui.classes + operators.classes:
         bpy.utils.register_class(cls)
     bpy.types.Material.ndfbake_settings = bpy.props.PointerProperty(type=ui.NDFBakeSettings)
 
 
 def unregister():
-    bake.remove_handlers()
+    lobe_folders.remove_handlers()
     del bpy.types.Material.ndfbake_settings
     for cls in reversed(ui.classes + operators.classes):
         bpy.utils.unregister_class(cls)

@@ -8,26 +8,14 @@ A bake has three steps, so that the UI can run the slow one on a worker thread:
 
 `bake_material()` runs the three in a row (scripts, `blender -b`). `revert()` undoes a bake:
 the Principled BSDF's links come back, the group node, node groups and lobe images go; the lobe
-files go when the .blend is next saved (see below).
+files go when the file is closed, if no saved .blend uses them (lobe_folders.py).
 
 Files (choices the design leaves open):
-- The lobe textures go into a folder beside the .blend named after the material,
-  `//<material>.ndfbake/`, and images refer to them with relative paths, so the .blend and its
-  folders move together. A name with characters outside [A-Za-z0-9_.-] has them replaced by '_'
-  and gets '~' and a hash of the exact name appended (`//Metal_01~1a2b3c4d.ndfbake/` for
-  "Metal 01"), so that no two names share a folder.
-- A bake's folder is never written again: a re-bake goes into a new one (`//<material>~2.ndfbake/`
-  while the previous one still exists), so that Ctrl-Z after a re-bake or a Revert finds the
-  previous bake's files where its nodes expect them, and the .blend on disk keeps working until it
-  is saved again. Folders are chosen among those that exist neither on disk nor in any material's
-  bake record (compared without case: a .blend may move to a case-insensitive disk), which also
-  keeps apart two .blend files beside each other with a material of the same name.
-- The folders this session's bakes wrote or let go (a re-bake's previous one, a reverted one) are
-  deleted when the .blend is saved, those that no material's bake and no image then uses (a
-  save_post handler): what a saved .blend refers to always exists. A bake's folder is where its
-  images are (record_folder), which stays right when "Save As" moves the .blend elsewhere. A copy of a baked material (Shift+D
-  copies the record) shares its folder, so it stays while either uses it. Only files the bake
-  writes are deleted, then the folder if it is empty.
+- The lobe textures go into a new folder beside the .blend named after the material,
+  `//<material>.ndfbake/` (`~2`, `~3`… while earlier bakes' folders exist), and images refer to
+  them with relative paths, so the .blend and its folders move together. lobe_folders.py says how
+  folders are named and when they are deleted: never while a .blend that may use them is open or
+  on disk, so Ctrl-Z after a bake, a re-bake or a Revert always finds its files.
 - The library writes the levels the scene's cameras reach (scene_lod.py), one MIP atlas per lobe
   slot, and report.json into a pending folder beside the new lobe folder, which finish() renames
   into place only after it has checked the material: a failed or cancelled bake changes no file
@@ -42,7 +30,6 @@ Files (choices the design leaves open):
   texture with box, sphere or tube projection (no UV for the atlas lookup) gets "RENDERER".
   README gives the measurement behind the default.
 """
-import hashlib
 import json
 import os
 import re
@@ -51,13 +38,11 @@ import time
 from dataclasses import dataclass, field
 
 import bpy
-from bpy.app.handlers import persistent
 
-from . import material_scan, native, nodes, scene_lod
+from . import lobe_folders, material_scan, native, nodes, scene_lod
 
 RECORD_KEY = material_scan.RECORD_KEY
 RECORD_VERSION = 1
-FOLDER_SUFFIX = ".ndfbake"
 
 # Weights of the library's progress stages in the overall fraction (each reports 0..1).
 _STAGES = (("decode", 0.02), ("fit", 0.60), ("measure", 0.30), ("write", 0.08))
@@ -91,137 +76,6 @@ class BakeResult:
     summary: str = ""
 
 
-def safe_name(name):
-    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip(".") or "material"
-
-
-def folder_name(name, version=1):
-    """'<name>.ndfbake', with '~<hash of the exact name>' where safe_name changed it ('~' never
-    survives safe_name, so no other name's folder looks the same), and '~<version>' from 2 up."""
-    safe = safe_name(name)
-    if safe != name:
-        safe += "~" + hashlib.sha1(name.encode("utf-8")).hexdigest()[:8]
-    return safe + ("~%d" % version if version > 1 else "") + FOLDER_SUFFIX
-
-
-def _same_folder(a, b):
-    return os.path.normcase(os.path.normpath(a)).casefold() == os.path.normcase(os.path.normpath(b)).casefold()
-
-
-def record_folder(rec):
-    """The absolute folder of a bake: where its lobe images' files are (Blender remaps image paths
-    when the .blend is saved elsewhere; the record's relative 'folder' it does not), else the
-    record's folder."""
-    for name in rec.get("images", []):
-        image = bpy.data.images.get(name)
-        if image is not None and image.filepath:
-            return os.path.dirname(material_scan.image_file_path(image))
-    return os.path.normpath(bpy.path.abspath(rec["folder"])) if rec.get("folder") else ""
-
-
-def folder_users(folder, but=None):
-    """The materials, other than `but`, whose bake is in `folder` (absolute)."""
-    users = []
-    for material in bpy.data.materials:
-        rec = material_scan.record(material) if material is not but else None
-        if rec and _same_folder(record_folder(rec), folder):
-            users.append(material)
-    return users
-
-
-def _images_used_in(folder):
-    """The images of files in `folder` that something still renders with: a user other than a node
-    group, or a node group that is itself so used. (ID.users is not enough: after Material.copy()
-    a removed group node can leave its group counted as used.)"""
-    images = [image for image in bpy.data.images if image.source == "FILE" and image.filepath
-              and _same_folder(os.path.dirname(material_scan.image_file_path(image)), folder)]
-    if not images:
-        return []
-    users = bpy.data.user_map(subset=images + list(bpy.data.node_groups))
-
-    def used(datablock, seen):
-        if datablock in seen:
-            return False
-        seen.add(datablock)
-        return any(not isinstance(user, bpy.types.NodeTree) or used(user, seen) for user in users.get(datablock, ()))
-    return [image for image in images if used(image, set())]
-
-
-# Bounds the search for a free folder: that many versions of one material on disk at once means
-# something else is wrong (a folder that cannot be deleted), and the user should hear of it.
-MAX_FOLDER_VERSIONS = 100
-
-
-def lobe_folder(material):
-    """('//…ndfbake', absolute path) for a new bake of `material`: the first of its folder names
-    that no file on disk and no material's bake record (its own included) already has. The
-    absolute path is '' for an unsaved .blend."""
-    if not bpy.data.filepath:
-        return "//" + folder_name(material.name), ""
-    for version in range(1, MAX_FOLDER_VERSIONS + 1):
-        relative = "//" + folder_name(material.name, version)
-        absolute = os.path.normpath(bpy.path.abspath(relative))
-        if not (os.path.lexists(absolute) or os.path.lexists(absolute + PENDING_SUFFIX) or folder_users(absolute)):
-            return relative, absolute
-    raise BakeError("FOLDER_IN_USE", "%d lobe folders of '%s' are in the way beside the .blend (%s …): save the "
-                                     ".blend to delete those it no longer uses, or remove them" % (
-                                         MAX_FOLDER_VERSIONS, material.name, folder_name(material.name)))
-
-
-# Folders this session's bakes wrote or released (absolute paths): delete_unused_folders() deletes
-# those no material names, on every save. Forgotten when another .blend is loaded.
-_session_folders = set()
-
-
-def _track(folder):
-    if folder:
-        _session_folders.add(os.path.normpath(folder))
-        _install_handlers()
-
-
-def delete_unused_folders():
-    """Deletes the bake files (then the folder, if empty) of every folder this session's bakes
-    wrote or released that no material names any more. Returns (files removed, [not removed])."""
-    removed, left = 0, []
-    for folder in sorted(_session_folders):
-        if folder_users(folder) or _images_used_in(folder):
-            continue
-        names = os.listdir(folder) if os.path.isdir(folder) else []
-        count, failed = _delete_bake_files(folder, names)
-        removed += count
-        left += failed
-        if not failed:
-            _session_folders.discard(folder)
-    return removed, left
-
-
-@persistent
-def _delete_unused_folders_on_save(*_):
-    removed, left = delete_unused_folders()
-    if left:
-        print("ndfbake: could not delete %s" % ", ".join(left))
-
-
-@persistent
-def _forget_session_folders(*_):
-    _session_folders.clear()
-
-
-def _install_handlers():
-    if _delete_unused_folders_on_save not in bpy.app.handlers.save_post:
-        bpy.app.handlers.save_post.append(_delete_unused_folders_on_save)
-    if _forget_session_folders not in bpy.app.handlers.load_post:
-        bpy.app.handlers.load_post.append(_forget_session_folders)
-
-
-def remove_handlers():
-    """For the add-on's unregister()."""
-    for handlers, handler in ((bpy.app.handlers.save_post, _delete_unused_folders_on_save),
-                              (bpy.app.handlers.load_post, _forget_session_folders)):
-        if handler in handlers:
-            handlers.remove(handler)
-
-
 def is_baked(material):
     return material is not None and material_scan.record(material) is not None
 
@@ -241,9 +95,6 @@ def settings_from_material(material):
 
 # ---- step 1: prepare ------------------------------------------------------------------------------
 
-PENDING_SUFFIX = ".pending"
-
-
 def _plan_lod(material, scan, settings):
     """The scene's level of detail for the material (scene_lod.plan), or None: level 0 filtered
     by the renderer; and why not, where the material asked for the scene's."""
@@ -251,14 +102,15 @@ def _plan_lod(material, scan, settings):
         return None, ""
     tree = material.node_tree
     textures = [tree.nodes[t.image_texture] for t in scan.targets]
-    if any(t.projection != "FLAT" for t in textures):
-        return None, "its texture has %s projection" % textures[0].projection.lower()
-    repeats = {scene_lod.texture_repeat(t) for t in textures}
-    if None in repeats or len(repeats) > 1:
-        return None, "its texture coordinates do not come from a UV map (through Mapping nodes)"
-    uv_map = tree.nodes[scan.targets[0].normal_map].uv_map
+    for texture in textures:
+        if texture.projection != "FLAT":
+            return None, "Image Texture '%s' has %s projection" % (texture.name, texture.projection.lower())
+    uvs = {scene_lod.texture_uv(t) for t in textures}
+    if None in uvs or len(uvs) > 1:
+        return None, "its texture coordinates do not come from one UV map (through Mapping nodes)"
+    repeat, uv_map = uvs.pop()
     try:
-        return scene_lod.plan(bpy.context.scene, material, tuple(scan.image.size), uv_map, repeats.pop()), ""
+        return scene_lod.plan(bpy.context.scene, material, tuple(scan.image.size), uv_map, repeat), ""
     except native.Error as e:
         raise BakeError("BAD_MESH", "cannot measure the texel density of the meshes using '%s' (%s): fix the mesh, "
                                     "or set Level of Detail to Renderer" % (material.name, e.message)) from None
@@ -280,7 +132,10 @@ def prepare(material, settings=None):
         raise BakeError("BAD_SETTINGS", "maximum lobes must be 1..%d, got %d" % (native.MAX_LOBES, settings.max_lobes))
     if not 0.0 <= settings.tolerance <= 1.0:
         raise BakeError("BAD_SETTINGS", "tolerance must be in [0, 1], got %g" % settings.tolerance)
-    relative, absolute = lobe_folder(material)
+    try:
+        relative, absolute = lobe_folders.new_folder(material)
+    except lobe_folders.FolderError as e:
+        raise BakeError("FOLDER_IN_USE", str(e)) from None
     if not absolute:
         raise BakeError("UNSAVED_BLEND", "save the .blend first: the lobe textures of '%s' are written beside it"
                         % material.name)
@@ -288,7 +143,7 @@ def prepare(material, settings=None):
         raise BakeError("BAD_SETTINGS", "level of detail must be SCENE or RENDERER, got %r" % settings.level_of_detail)
     lod, lod_note = _plan_lod(material, scan, settings)
     return BakeJob(material_name=material.name, image_path=scan.image_path, folder=relative,
-                   out_dir=absolute + PENDING_SUFFIX, final_dir=absolute,
+                   out_dir=absolute + lobe_folders.PENDING_SUFFIX, final_dir=absolute,
                    wrap=native.WRAP_REPEAT if scan.wrap == "REPEAT" else native.WRAP_CLAMP,
                    roughness=min(max(scan.roughness, 0.01), 1.0), settings=settings,
                    targets=[(t.principled, t.normal_map, t.image_texture) for t in scan.targets],
@@ -378,7 +233,7 @@ class BakeJob:
                          max_levels=self.lod.levels if self.lod else 0, atlas=self.lod is not None)
         except native.Error as e:
             if not existed:
-                _remove_empty_folder(self.out_dir)
+                lobe_folders.delete_bake_files(self.out_dir, [])  # the empty folder, if the library left it
             raise _bake_error(e, self) from None
         finally:
             self.seconds = time.perf_counter() - start
@@ -417,7 +272,7 @@ def _bake_error(error, job):
 
 
 def _commit_pending(job):
-    """Renames a pending job's folder into its lobe folder (new: see lobe_folder)."""
+    """Renames a pending job's folder into its lobe folder (new: lobe_folders.new_folder)."""
     if job.out_dir == job.final_dir:
         return
     try:
@@ -426,20 +281,16 @@ def _commit_pending(job):
         raise BakeError("OUTPUT_NOT_WRITABLE", "cannot move the lobe textures of '%s' into %s: %s"
                         % (job.material_name, job.final_dir, e.strerror)) from None
     job.out_dir = job.final_dir
-    _track(job.final_dir)
+    lobe_folders.created(job.final_dir)
+    lobe_folders.release(job.final_dir)
 
 
 def discard_pending(job):
-    """Deletes what a pending job wrote (nothing else: only its own files in its own folder)."""
+    """Deletes what a pending job wrote (nothing else: only its own files in its own folder) and
+    gives its folder name back."""
     if job.out_dir != job.final_dir and os.path.isdir(job.out_dir):
-        _delete_bake_files(job.out_dir, os.listdir(job.out_dir))
-
-
-def _remove_empty_folder(path):
-    try:
-        os.rmdir(path)
-    except OSError:
-        pass
+        lobe_folders.delete_bake_files(job.out_dir, os.listdir(job.out_dir))
+    lobe_folders.release(job.final_dir)
 
 
 # ---- step 3: finish (main thread) ----------------------------------------------------------------
@@ -537,7 +388,7 @@ def finish(job):
 
     old = material_scan.record(material)
     if old:  # its nodes and images go now; its folder when the .blend is saved (Ctrl-Z keeps it)
-        _track(record_folder(old))
+        lobe_folders.track(lobe_folders.record_folder(old))
         _remove_nodes(material, old)
         _remove_images(old.get("images", []))
 
@@ -563,7 +414,7 @@ def finish(job):
         _remove_images(created)
         if RECORD_KEY in material.keys():
             del material[RECORD_KEY]
-        _delete_bake_files(job.out_dir, os.listdir(job.out_dir))
+        lobe_folders.delete_bake_files(job.out_dir, os.listdir(job.out_dir))
         raise BakeError("INTERNAL", "building the node group of '%s' failed (%s: %s); the material is as it was "
                         "before baking" % (material.name, type(e).__name__, e)) from e
 
@@ -577,7 +428,7 @@ def finish(job):
     rec = {
         "version": RECORD_VERSION,
         "folder": job.folder,
-        "files": [f for f in files if _is_bake_file(f)],
+        "files": [f for f in files if lobe_folders.is_bake_file(f)],
         "images": sorted(created),
         "targets": targets,
         "lobes": len(images),
@@ -591,18 +442,13 @@ def finish(job):
                       report=report, summary=summary)
 
 
-def _is_bake_file(name):
-    return name == "report.json" or re.fullmatch(r"level\d+_(lobe|color)\d+\.exr|atlas_lobe\d+\.exr",
-                                                 name) is not None
-
-
 # ---- whole bakes ---------------------------------------------------------------------------------
 
 def bake_material(material, settings=None, progress=None):
     """prepare + run + finish on the calling thread (scripts, `blender -b`, operator execute())."""
     job = prepare(material, settings)
-    job.run(progress)
     try:
+        job.run(progress)
         return finish(job)
     except BakeError:
         discard_pending(job)
@@ -660,9 +506,9 @@ def _remove_images(names):
 
 
 def revert(material):
-    """Restores the material as it was before the bake. Its lobe folder is deleted when the .blend
-    is next saved, unless a material still names it then (a copy, or this one after Ctrl-Z).
-    Returns (the folder, [names of the other materials that use it])."""
+    """Restores the material as it was before the bake. Its lobe folder is deleted when the file is
+    closed, if no .blend uses it then (lobe_folders.py). Returns (the folder, [names of the other
+    materials that use it])."""
     rec = material_scan.record(material) if material is not None else None
     if rec is None:
         raise BakeError("NOT_BAKED", "material '%s' has no ndfbake bake to revert" % (
@@ -670,28 +516,9 @@ def revert(material):
     if material.library is not None:
         raise BakeError("LINKED_MATERIAL", "material '%s' is linked from %s: revert it in that file"
                         % (material.name, material.library.filepath))
-    folder = record_folder(rec)
+    folder = lobe_folders.record_folder(rec)
     _remove_nodes(material, rec)
     _remove_images(rec.get("images", []))
     del material[RECORD_KEY]
-    _track(folder)
-    return folder, [m.name for m in folder_users(folder)] if folder else []
-
-
-def _delete_bake_files(folder, names):
-    """Deletes the bake's own files (never anything else) and then the folder if it is empty."""
-    removed, left = 0, []
-    if folder and os.path.isdir(folder):
-        for name in names:
-            if not _is_bake_file(name):
-                continue
-            path = os.path.join(folder, name)
-            try:
-                os.remove(path)
-                removed += 1
-            except FileNotFoundError:
-                pass
-            except OSError as e:
-                left.append("%s (%s)" % (path, e.strerror))
-        _remove_empty_folder(folder)
-    return removed, left
+    lobe_folders.track(folder)
+    return folder, [m.name for m in lobe_folders.folder_users(folder)] if folder else []

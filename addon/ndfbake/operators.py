@@ -9,7 +9,7 @@
   one after another on the calling thread; from the UI, modal like ndfbake.bake, every native bake
   into a pending folder and all finished together, so that Esc leaves every material as it was.
 - ndfbake.revert: undoes the bake of the active material (or `material=`); the lobe textures are
-  deleted at the next save (bake.py explains why).
+  deleted when the file is closed, if no saved .blend uses them (lobe_folders.py).
 Failures are reported as one ERROR line each; from Python, bpy.ops raises RuntimeError then.
 """
 import bpy
@@ -231,7 +231,8 @@ class NDFBAKE_OT_bake_all(_ModalBakes, bpy.types.Operator):
 class NDFBAKE_OT_revert(bpy.types.Operator):
     bl_idname = "ndfbake.revert"
     bl_label = "Revert"
-    bl_description = "Restore the material's original nodes; its lobe textures are deleted when the .blend is saved"
+    bl_description = ("Restore the material's original nodes; its lobe textures are deleted when the file is "
+                      "closed, if no saved .blend uses them")
     bl_options = {"REGISTER", "UNDO"}
 
     material: StringProperty(name="Material", description="Material to revert; empty: the active material")
@@ -247,8 +248,8 @@ class NDFBAKE_OT_revert(bpy.types.Operator):
             self.report({"INFO"}, "ndfbake: %s reverted; its lobe textures stay, %s use%s them" % (
                 material.name, ", ".join(kept_for), "s" if len(kept_for) == 1 else ""))
         else:
-            self.report({"INFO"}, "ndfbake: %s reverted; its lobe textures (%s) are deleted when the .blend is "
-                                  "saved" % (material.name, bpy.path.relpath(folder) if folder else "none"))
+            self.report({"INFO"}, "ndfbake: %s reverted; its lobe textures (%s) are deleted when the file is "
+                                  "closed, if no saved .blend uses them" % (material.name, folder or "none"))
         return {"FINISHED"}
 
 

@@ -23,7 +23,7 @@ camera in the scene, gives the levels the bake must fit: up to the ceiling of th
 plus one for the blend between two levels.
 
 A Mapping node between the UV map and the texture (tiling) scales texels_per_unit by how often
-the texture repeats per unit of UV (texture_repeat). Where the texture coordinates come from
+the texture repeats per unit of UV, measured on the UV map the texture reads (texture_uv). Where the texture coordinates come from
 anything else (Generated, Object, math nodes) the density is unknown, and the bake leaves the
 level of detail to the renderer.
 """
@@ -212,26 +212,32 @@ def footprints(positions, normals, camera, texels_per_unit):
     return footprint / np.maximum(facing, MIN_FACING) ** STRETCH
 
 
-def texture_repeat(texture):
-    """How many times the image texture node's image repeats per unit of the mesh's UV map: 1 for
-    the UV map itself (Vector unlinked, a UV Map node, Texture Coordinate's UV), times the
-    geometric mean of the x and y scale of each Mapping node on the way (divided for a Texture-type
-    mapping, which moves the texture instead of the coordinates); None where that cannot be known
-    from the nodes (other coordinates, a linked scale, math)."""
+def texture_uv(texture):
+    """(repeat, UV map) of an image texture node: which UV map it reads ("" for the one active
+    for rendering: Vector unlinked or Texture Coordinate's UV; a UV Map node's name) and how many
+    times its image repeats per unit of that map: the geometric mean of the x and y scale of each
+    Mapping node on the way (divided for a Texture-type mapping, which moves the texture instead of
+    the coordinates; muted ones pass the vector through). None where the nodes do not say (other
+    coordinates, a linked scale or rotation, a rotation out of the UV plane, math)."""
     node, output = material_scan.upstream(texture.inputs["Vector"])
     repeat = 1.0
     while node is not None and node.bl_idname == "ShaderNodeMapping":
-        if node.vector_type not in ("POINT", "TEXTURE") or node.inputs["Scale"].is_linked:
+        if not node.mute:
+            if node.vector_type not in ("POINT", "TEXTURE") or node.inputs["Scale"].is_linked \
+                    or node.inputs["Rotation"].is_linked or any(abs(a) > 1e-6 for a in node.inputs["Rotation"].default_value[:2]):
+                return None
+            sx, sy = node.inputs["Scale"].default_value[:2]
+            scale = math.sqrt(abs(sx * sy))
+            if not scale > 0.0:
+                return None
+            repeat *= scale if node.vector_type == "POINT" else 1.0 / scale
+        if not node.inputs["Vector"].is_linked:
             return None
-        sx, sy = node.inputs["Scale"].default_value[:2]
-        scale = math.sqrt(abs(sx * sy))
-        if not scale > 0.0 or not node.inputs["Vector"].is_linked:
-            return None
-        repeat *= scale if node.vector_type == "POINT" else 1.0 / scale
         node, output = material_scan.upstream(node.inputs["Vector"])
-    if node is None or node.bl_idname == "ShaderNodeUVMap" or (
-            node.bl_idname == "ShaderNodeTexCoord" and output.name == "UV"):
-        return repeat
+    if node is None or (node.bl_idname == "ShaderNodeTexCoord" and output.name == "UV"):
+        return repeat, ""
+    if node.bl_idname == "ShaderNodeUVMap":
+        return repeat, node.uv_map
     return None
 
 
@@ -241,7 +247,7 @@ def level_count(width, height):
 
 def material_lod(scene, material, image_size, uv_map="", repeat=1.0):
     """Texel density and the levels the scene's cameras reach, for a map of image_size (w, h)
-    repeating `repeat` times per unit of UV (texture_repeat)."""
+    repeating `repeat` times per unit of UV (texture_uv)."""
     depsgraph = bpy.context.evaluated_depsgraph_get()
     meshes = [m for m in (_world_mesh(obj, depsgraph, uv_map, material) for obj in objects_using(scene, material)) if m]
     side = math.sqrt(max(1, image_size[0]) * max(1, image_size[1]))

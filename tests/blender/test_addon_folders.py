@@ -13,10 +13,13 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 - A Mix Shader the user put after the group node stays after Revert (fed by the Principled again)
   and after a re-bake (fed by the new group).
 - Box projection bakes level 0 for the renderer to filter, with a camera in the scene.
-- Ctrl-Z after a re-bake and after a Revert gives back a material whose lobe images load; the
-  next save deletes only the folders no material names (here the undone re-bake's).
+- Ctrl-Z after a re-bake and after a Revert gives back a material whose lobe images load; saving
+  and closing deletes only the folders the file does not use (here the undone re-bake's).
 - Save As into another folder keeps the lobe folder the moved .blend's images use, and a Revert
   there releases that folder (not one of the same name beside the new .blend).
+- Folders are deleted only when the file is closed (h.close_file), and only those no .blend on
+  disk uses: not the one the file before a Save As uses, nor one a Save Copy uses, nor the folder
+  of a library a baked material was appended from; Ctrl-Z after a save finds the files.
 """
 import os
 import sys
@@ -61,7 +64,8 @@ def test_names_that_clash_on_disk_get_folders_of_their_own():
         kept = {r.material: _lobe_files(bpy.path.abspath(r.folder)) for r in results}
         reverted, kept_for = bake.revert(first)
         bpy.ops.wm.save_mainfile()
-        h.expect(not os.path.exists(reverted) and not kept_for, "revert and save: %s left, kept for %s"
+        h.close_file()
+        h.expect(not os.path.exists(reverted) and not kept_for, "revert, save and close: %s left, kept for %s"
                  % (reverted, kept_for))
         for material in others:
             folder = bpy.path.abspath(material_scan.record(material)["folder"])
@@ -84,6 +88,7 @@ def test_a_copy_shares_the_folder_until_it_is_baked_itself():
         reverted, kept_for = bake.revert(copy)
         h.expect(kept_for == ["Bumpy"], "revert of the copy: kept for %s" % kept_for)
         bpy.ops.wm.save_mainfile()
+        h.close_file()
         h.expect(_lobe_files(folder) == files and bake.is_baked(original), "the original lost its bake")
         _images_load(original)
 
@@ -96,7 +101,8 @@ def test_a_copy_shares_the_folder_until_it_is_baked_itself():
         reverted, kept_for = bake.revert(original)
         h.expect(not kept_for, "revert of the original: kept for %s" % kept_for)
         bpy.ops.wm.save_mainfile()
-        h.expect(not os.path.exists(folder), "the original's folder is left after the save")
+        h.close_file()
+        h.expect(not os.path.exists(folder), "the original's folder is left after save and close")
         _images_load(copy)
     finally:
         h.cleanup(directory)
@@ -207,8 +213,9 @@ def test_undo_after_rebake_and_revert_finds_the_files():
         h.expect(bake.is_baked(material) and len(_images_load(material)) == 4, "Ctrl-Z after the revert")
 
         bpy.ops.wm.save_mainfile()
+        h.close_file()
         folders = sorted(f for f in os.listdir(directory) if f.endswith(".ndfbake"))
-        h.expect(folders == [first[2:]], "after the save: %s (only %s is named by a material)" % (folders, first))
+        h.expect(folders == [first[2:]], "after save and close: %s (the file uses only %s)" % (folders, first))
     finally:
         h.cleanup(directory)
 
@@ -228,7 +235,69 @@ def test_save_as_elsewhere_keeps_the_textures_it_uses():
         reverted, _ = bake.revert(material)
         h.expect(os.path.normpath(reverted) == folder, "revert released %s, not %s" % (reverted, folder))
         bpy.ops.wm.save_mainfile()
-        h.expect(not os.path.exists(folder), "the reverted folder is left after the save")
+        h.close_file()
+        h.expect(not os.path.exists(folder), "the reverted folder is left after save and close")
+    finally:
+        h.cleanup(directory)
+
+
+def test_folders_other_blend_files_use_are_kept():
+    """A folder stays while any .blend saved with it exists: the file before a Save As, a Save
+    Copy, the library a material was appended from; and Ctrl-Z after a save finds its files."""
+    from ndfbake import bake, lobe_folders, material_scan
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        bpy.ops.wm.save_mainfile()
+        first = os.path.join(directory, "Bumpy.ndfbake")
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "scene_v2.blend"))
+        bake.bake_material(bpy.data.materials["Bumpy"], bake.BakeSettings(max_lobes=1))
+        bpy.ops.wm.save_mainfile()
+        h.close_file()
+        h.expect(os.path.isdir(first), "closing scene_v2.blend deleted the folder scene.blend uses")
+        second = lobe_folders.record_folder(material_scan.record(bpy.data.materials["Bumpy"]))
+
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "backup.blend"), copy=True)
+        bake.revert(bpy.data.materials["Bumpy"])
+        bpy.ops.wm.save_mainfile()
+        h.close_file()
+        h.expect(os.path.isdir(second), "closing deleted the folder a Save Copy (backup.blend) uses")
+
+        # The library: a baked material appended into a new file, then reverted there.
+        h.reset_scene()
+        with bpy.data.libraries.load(os.path.join(directory, "scene.blend"), link=False) as (source, target):
+            target.materials = ["Bumpy"]
+        appended = bpy.data.materials["Bumpy"]
+        h.plane_with(appended)
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "shot.blend"))
+        _images_load(appended)
+        bake.revert(appended)
+        bpy.ops.wm.save_mainfile()
+        h.close_file()
+        h.expect(os.path.isdir(first), "closing shot.blend deleted the folder of the library it appended from")
+    finally:
+        h.cleanup(directory)
+
+
+def test_undo_after_a_save_finds_the_files():
+    from ndfbake import material_scan
+    directory = h.temp_dir()
+    try:
+        h.baked_scene(directory)
+        bpy.ops.ed.undo_push(message="ndfbake test scene")
+        h.expect(bpy.ops.ndfbake.bake(material="Bumpy") == {"FINISHED"}, "bake")
+        bpy.ops.ed.undo_push(message="Bake")
+        bpy.ops.wm.save_mainfile()
+        first = material_scan.record(bpy.data.materials["Bumpy"])["folder"]
+        bpy.data.materials["Bumpy"].ndfbake_settings.max_lobes = 1
+        h.expect(bpy.ops.ndfbake.bake(material="Bumpy") == {"FINISHED"}, "re-bake")
+        bpy.ops.ed.undo_push(message="Bake")
+        bpy.ops.wm.save_mainfile()
+        h.expect(bpy.ops.ed.undo() == {"FINISHED"}, "Ctrl-Z after the save")
+        material = bpy.data.materials["Bumpy"]
+        h.expect(material_scan.record(material)["folder"] == first, "Ctrl-Z did not bring back the first bake")
+        h.expect(len(_images_load(material)) == 4, "the first bake's images after a save and Ctrl-Z")
     finally:
         h.cleanup(directory)
 
@@ -241,4 +310,6 @@ if __name__ == "__main__":
            test_revert_and_rebake_keep_a_mix_shader_added_after_the_bake,
            test_box_projection_leaves_filtering_to_the_renderer,
            test_undo_after_rebake_and_revert_finds_the_files,
-           test_save_as_elsewhere_keeps_the_textures_it_uses])
+           test_save_as_elsewhere_keeps_the_textures_it_uses,
+           test_folders_other_blend_files_use_are_kept,
+           test_undo_after_a_save_finds_the_files])

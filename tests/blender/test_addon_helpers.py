@@ -199,6 +199,13 @@ def listing(directory):
     return sorted(result)
 
 
+def close_file():
+    """What closing the .blend does to lobe folders (opening another file, File > Revert, quit:
+    lobe_folders' load_pre and exit handlers): deletes those the file as saved no longer uses."""
+    from ndfbake import lobe_folders
+    return lobe_folders.delete_unused_folders()
+
+
 def expect(condition, message):
     if not condition:
         raise AssertionError(message)

@@ -164,7 +164,7 @@ def reopen(blend):
 
 
 def test_command_line_bake_changes_only_the_baked_materials():
-    from ndfbake import bake, nodes
+    from ndfbake import bake, lobe_folders, nodes
     directory = h.temp_dir()
     try:
         h.reset_scene()
@@ -196,12 +196,13 @@ def test_command_line_bake_changes_only_the_baked_materials():
             h.expect(new, "the bake added no %s" % kind)
             untagged = [name for name in new if nodes.TAG not in after[kind][name][-1]]
             h.expect(not untagged, "%s added without the ndfbake tag: %s" % (kind, untagged))
-        folders = [os.path.join(directory, bake.folder_name(name)) for name in expected]
+        folders = [os.path.join(directory, lobe_folders.folder_name(name)) for name in expected]
         h.expect(all(os.path.isdir(f) for f in folders), "a lobe folder is missing: %s" % os.listdir(directory))
 
         for name in expected:
             bake.revert(bpy.data.materials[name])
-        removed, left = bake.delete_unused_folders()  # what saving the file does
+        bpy.ops.wm.save_mainfile()
+        removed, left = h.close_file()
         h.expect(removed > 0 and not left, "after revert: %d files removed, left %s" % (removed, left))
         reverted = dump_file()
         for name in expected:

@@ -14,7 +14,8 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 - A bake with a camera writes only the levels the camera reaches, and one atlas per lobe; the
   group's pixel angle follows the lens and the resolution through drivers; revert removes them.
 - A Mapping node that tiles the texture 4x (Point) or 2x (Texture type, scale 0.5) multiplies the
-  texel density by 4 (2); coordinates from elsewhere (Object) leave level 0 to the renderer.
+  texel density by 4 (2), a muted one by 1, a UV Map node reading a UV map tiled 4x gives 4x;
+  coordinates from elsewhere (Object) or rotated out of the UV plane leave level 0 to the renderer.
 """
 import math
 import os
@@ -259,7 +260,8 @@ def test_a_bake_with_a_camera_writes_only_the_levels_it_reaches():
         h.expect(nodes.lobe_count(group.node_tree) == 2, "two lobes")
         bake.revert(material)
         bpy.ops.wm.save_mainfile()
-        h.expect(not os.path.exists(bpy.path.abspath(result.folder)), "revert and save left the folder")
+        h.close_file()
+        h.expect(not os.path.exists(bpy.path.abspath(result.folder)), "revert, save and close left the folder")
         leftovers = [g.name for g in bpy.data.node_groups]
         h.expect(not leftovers, "revert left node groups: %s" % leftovers)
         h.expect(material.node_tree.animation_data is None, "revert left the drivers' animation data")
@@ -287,9 +289,32 @@ def test_a_mapping_node_scales_the_texel_density():
             print("  %s scale %g: %.2f texels per unit" % (vector_type, scale, density))
             h.expect(abs(density - expected) < 0.05, "%s scale %g: texel density %.3f, expected %g (64 untiled)"
                      % (vector_type, scale, density, expected))
-        tree.links.new(coords.outputs["Object"], mapping.inputs["Vector"])
+        mapping.mute = True  # passes the UVs through: no tiling
         result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
-        h.expect("level 0 filtered by the renderer (its texture coordinates do not come from a UV map" in result.summary,
+        density = tree.nodes["ndfbake"].inputs["Texels per Unit"].default_value
+        h.expect(abs(density - 64.0) < 0.05, "a muted Mapping node: %.3f texels per unit, expected 64" % density)
+        mapping.mute = False
+        mapping.inputs["Rotation"].default_value = (math.pi / 2, 0.0, 0.0)  # out of the UV plane
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        h.expect("level 0 filtered by the renderer (its texture coordinates do not come from one UV map" in result.summary,
+                 result.summary)
+        mapping.inputs["Rotation"].default_value = (0.0, 0.0, 0.0)
+        # A UV Map node reading another UV map, tiled 4x there: measured on that map.
+        mesh = bpy.data.objects["Plane"].data
+        tiled = mesh.uv_layers.new(name="Tiled")
+        for loop, uv in zip(tiled.data, mesh.uv_layers["UVMap"].data):
+            loop.uv = (4.0 * uv.uv[0], 4.0 * uv.uv[1])
+        uv_node = tree.nodes.new("ShaderNodeUVMap")
+        uv_node.uv_map = "Tiled"
+        tree.links.new(uv_node.outputs["UV"], tree.nodes["Normal Texture"].inputs["Vector"])
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        density = tree.nodes["ndfbake"].inputs["Texels per Unit"].default_value
+        h.expect(abs(density - 256.0) < 0.05, "a UV Map node on a 4x UV map: %.3f texels per unit, expected 256"
+                 % density)
+        tree.links.new(coords.outputs["Object"], mapping.inputs["Vector"])
+        tree.links.new(mapping.outputs["Vector"], tree.nodes["Normal Texture"].inputs["Vector"])
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        h.expect("level 0 filtered by the renderer (its texture coordinates do not come from one UV map" in result.summary,
                  result.summary)
     finally:
         h.cleanup(directory)

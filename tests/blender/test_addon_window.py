@@ -83,7 +83,7 @@ def _invoke_bake():
 
 
 def _tick():
-    from ndfbake import bake, operators
+    from ndfbake import bake, lobe_folders, operators
     state["ticks"] += 1
     step = state["step"]
     if step == "start":
@@ -239,7 +239,7 @@ def _tick():
         if operators.running_job is not None:
             return 0.05
         h.expect(all(bake.is_baked(bpy.data.materials[n]) for n in ("Window", "Second")), "Bake All did not bake both")
-        h.expect(not [n for n in os.listdir(state["dir"]) if n.endswith(bake.PENDING_SUFFIX)], "pending folders left")
+        h.expect(not [n for n in os.listdir(state["dir"]) if n.endswith(lobe_folders.PENDING_SUFFIX)], "pending folders left")
         print("Bake All from the UI baked both materials", flush=True)
         _finish(True, "modal bake, screenshot, Esc cancel, undo and Bake All work (%d UI ticks)" % state["ticks"])
     return 0.05
