@@ -410,7 +410,7 @@ def finish(job):
     except Exception as e:
         # A bug, not bad input: put the material back as it was before any bake, drop this bake's
         # images and files, and say so (no half-built material is left behind).
-        _remove_nodes(material, {"targets": targets})
+        _remove_nodes(material, {"targets": targets}, keep_edits=False)
         _remove_images(created)
         if RECORD_KEY in material.keys():
             del material[RECORD_KEY]
@@ -485,13 +485,15 @@ def bake_materials(materials, settings_for=None, progress=None):
 
 # ---- revert --------------------------------------------------------------------------------------
 
-def _remove_nodes(material, rec):
+def _remove_nodes(material, rec, keep_edits=True):
+    """Removes a bake's nodes; with keep_edits, what the user changed on its group nodes goes back
+    to the Principled BSDFs (nodes.write_back_inputs)."""
     tree = material.node_tree
     used = []
     for target in rec.get("targets", []):
         bypassed = [tuple(b) for b in target.get("bypassed", [])]
         group = nodes.remove_group_node(tree, target["group_node"], target["principled"], bypassed,
-                                        target.get("eevee_output", ""))
+                                        target.get("eevee_output", ""), keep_edits)
         if group is not None:
             used.append(group.name)
         used.append(target.get("node_group", ""))

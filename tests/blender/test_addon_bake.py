@@ -14,7 +14,9 @@ saved as a .blend in a temporary folder.
 - The operators work in the background; re-baking with fewer lobes emits a one-lobe group and
   drops the surplus textures; bake + save + reopen keeps working and reverts; bake_all bakes only
   what the scene renders; linked Principled inputs are carried over; packing works; keyframes and
-  drivers on the Principled's inputs move to the group node's and go again on Revert.
+  drivers on the Principled's inputs (with their modifiers) move to the group node's and go again
+  on Revert; edits on the group node survive a re-bake and Revert; two materials sharing an action
+  bake and revert independently.
 """
 import os
 import re
@@ -350,6 +352,8 @@ def test_animated_inputs_keep_animating():
         for frame, value in ((1, 0.0), (11, 10.0)):
             strength.default_value = value
             strength.keyframe_insert("default_value", frame=frame)
+        curve = tree.animation_data.action.fcurves[0]
+        curve.modifiers.new("CYCLES")  # repeats the 1..11 ramp
         driver = principled.inputs["Metallic"].driver_add("default_value").driver
         driver.type = "SCRIPTED"
         driver.expression = "0.25"
@@ -359,11 +363,11 @@ def test_animated_inputs_keep_animating():
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
         group = tree.nodes["ndfbake"]
         scene = bpy.context.scene
-        for frame, expected in ((1, 0.0), (6, 5.0), (11, 10.0)):
+        for frame, expected in ((1, 0.0), (6, 5.0), (11, 10.0), (16, 5.0)):
             scene.frame_set(frame)
             value = group.inputs["Emission Strength"].default_value
-            h.expect(abs(value - expected) < 0.6, "Emission Strength at frame %d: %g, expected about %g"
-                     % (frame, value, expected))
+            h.expect(abs(value - expected) < 0.6, "Emission Strength at frame %d: %g, expected about %g (the Cycles "
+                     "modifier repeats the ramp)" % (frame, value, expected))
         h.expect(abs(group.inputs["Metallic"].default_value - 0.25) < 1e-6, "the driver on Metallic was not carried")
         bake.revert(material)
         h.expect(sorted(f.data_path for f in tree.animation_data.action.fcurves) == paths_before,
@@ -373,9 +377,61 @@ def test_animated_inputs_keep_animating():
         h.cleanup(directory)
 
 
+def test_edits_on_the_group_node_survive_rebake_and_revert():
+    """After a bake the group node holds the material's inputs: a colour set and keyframed there
+    is what a re-bake starts from and what Revert leaves on the Principled BSDF."""
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        tree = material.node_tree
+        color = tree.nodes["ndfbake"].inputs["Base Color"]
+        for frame, green in ((1, 0.5), (11, 1.0)):
+            color.default_value = (0.0, green, 0.0, 1.0)
+            color.keyframe_insert("default_value", frame=frame)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        scene = bpy.context.scene
+        scene.frame_set(11)
+        h.expect(tuple(round(c, 3) for c in tree.nodes["ndfbake"].inputs["Base Color"].default_value)
+                 == (0.0, 1.0, 0.0, 1.0), "the re-bake lost the colour keyframed on the node")
+        bake.revert(material)
+        scene.frame_set(1)
+        principled = tree.nodes["Principled BSDF"].inputs["Base Color"]
+        h.expect(tuple(round(c, 3) for c in principled.default_value) == (0.0, 0.5, 0.0, 1.0),
+                 "Revert did not keep the node's keyframed colour: %s" % (tuple(principled.default_value),))
+    finally:
+        h.cleanup(directory)
+
+
+def test_two_materials_sharing_an_action_bake_and_revert():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        first = h.baked_scene(directory)
+        strength = first.node_tree.nodes["Principled BSDF"].inputs["Emission Strength"]
+        for frame, value in ((1, 0.0), (11, 10.0)):
+            strength.default_value = value
+            strength.keyframe_insert("default_value", frame=frame)
+        second = first.copy()
+        h.plane_with(second, "Second")
+        bpy.ops.wm.save_mainfile()
+        shared = first.node_tree.animation_data.action == second.node_tree.animation_data.action
+        print("  the copy shares the action: %s" % shared)
+        for material in (first, second):
+            bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        bake.revert(first)
+        bpy.context.scene.frame_set(6)
+        value = second.node_tree.nodes["ndfbake"].inputs["Emission Strength"].default_value
+        h.expect(abs(value - 5.0) < 0.6, "reverting the first material stopped the second's animation (%g)" % value)
+    finally:
+        h.cleanup(directory)
+
+
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_bake_adds_only_the_group_and_bypass, test_failure_while_building_nodes_rolls_back,
            test_operators_rebake_fewer_lobes_and_revert, test_save_reopen_then_revert,
            test_bake_all_bakes_what_the_scene_renders, test_linked_inputs_are_carried_and_restored,
-           test_a_user_graph_downstream_gets_no_eevee_output, test_pack_option, test_animated_inputs_keep_animating])
+           test_a_user_graph_downstream_gets_no_eevee_output, test_pack_option, test_animated_inputs_keep_animating,
+           test_edits_on_the_group_node_survive_rebake_and_revert, test_two_materials_sharing_an_action_bake_and_revert])
