@@ -40,7 +40,7 @@ def register():
 
 
 def unregister():
-    lobe_folders.remove_handlers()
+    lobe_folders.remove_handlers()  # and nothing of this session is deleted any more
     del bpy.types.Material.ndfbake_settings
     for cls in reversed(ui.classes + operators.classes):
         bpy.utils.unregister_class(cls)

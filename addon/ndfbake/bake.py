@@ -8,14 +8,15 @@ A bake has three steps, so that the UI can run the slow one on a worker thread:
 
 `bake_material()` runs the three in a row (scripts, `blender -b`). `revert()` undoes a bake:
 the Principled BSDF's links come back, the group node, node groups and lobe images go; the lobe
-files go when the file is closed, if no saved .blend uses them (lobe_folders.py).
+files go when the file is closed if no save used them (lobe_folders.py).
 
 Files (choices the design leaves open):
 - The lobe textures go into a new folder beside the .blend named after the material,
   `//<material>.ndfbake/` (`~2`, `~3`… while earlier bakes' folders exist), and images refer to
   them with relative paths, so the .blend and its folders move together. lobe_folders.py says how
-  folders are named and when they are deleted: never while a .blend that may use them is open or
-  on disk, so Ctrl-Z after a bake, a re-bake or a Revert always finds its files.
+  folders are named and when they are deleted: only if no .blend can know them (this session
+  wrote them and no save used them), when the file is closed; so Ctrl-Z after a bake, a re-bake
+  or a Revert always finds its files, and no saved .blend or backup loses its textures.
 - The library writes the levels the scene's cameras reach (scene_lod.py), one MIP atlas per lobe
   slot, and report.json into a pending folder beside the new lobe folder, which finish() renames
   into place only after it has checked the material: a failed or cancelled bake changes no file
@@ -387,8 +388,7 @@ def finish(job):
         atlas = nodes.AtlasLayout(width=layout["width"], height=layout["height"], levels=layout["levels"])
 
     old = material_scan.record(material)
-    if old:  # its nodes and images go now; its folder when the .blend is saved (Ctrl-Z keeps it)
-        lobe_folders.track(lobe_folders.record_folder(old))
+    if old:  # its nodes and images go now; its files stay for Ctrl-Z (lobe_folders.py)
         _remove_nodes(material, old)
         _remove_images(old.get("images", []))
 
@@ -508,9 +508,9 @@ def _remove_images(names):
 
 
 def revert(material):
-    """Restores the material as it was before the bake. Its lobe folder is deleted when the file is
-    closed, if no .blend uses it then (lobe_folders.py). Returns (the folder, [names of the other
-    materials that use it])."""
+    """Restores the material as it was before the bake. Its lobe folder stays for Ctrl-Z, and is
+    deleted when the file is closed if no save used it (lobe_folders.py). Returns (the folder,
+    [names of the other materials that use it])."""
     rec = material_scan.record(material) if material is not None else None
     if rec is None:
         raise BakeError("NOT_BAKED", "material '%s' has no ndfbake bake to revert" % (
@@ -522,5 +522,4 @@ def revert(material):
     _remove_nodes(material, rec)
     _remove_images(rec.get("images", []))
     del material[RECORD_KEY]
-    lobe_folders.track(folder)
     return folder, [m.name for m in lobe_folders.folder_users(folder)] if folder else []

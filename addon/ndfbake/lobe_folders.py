@@ -10,15 +10,15 @@ name (compared without case: the .blend may move to a case-insensitive disk), no
 names it and no bake in progress has reserved it; this also keeps apart two .blend files side by
 side with a material of the same name.
 
-Deleting. A lobe folder may be needed by any .blend that was ever saved while naming it: this one
-before a Save As, a Save Copy, a library another file appends the material from. So nothing is
-deleted when a bake is replaced or reverted, nor when the file is saved (Ctrl-Z after a save must
-still find the files). Each lobe folder keeps a list of the .blend files saved while using it
-(USERS_FILE, written on every save; a Save Copy, whose path Blender does not pass on, pins the
-folder for good). When this session's file is closed (another file opened, File › Revert, quit),
-the folders this session wrote or let go are deleted if the file as last saved does not use them
-and their list names no other .blend that exists. A folder from an older add-on without a list
-is never deleted. Only the files a bake writes are deleted, then the folder if it is empty.
+Deleting. A lobe folder may be needed by any .blend that was ever saved while using it: this one
+(and its .blend1 backups) before a re-bake or a Revert, the file before a Save As, a Save Copy, a
+library another file appends or links the material from, a copy made outside Blender. So a
+folder is deleted only if no .blend can know it: this session's bake wrote it, and no save of this
+session (any file, copies included) happened while a material or an image used it. That happens
+when the file is closed (another file opened, File > Revert, quit) or, for scripts,
+delete_unused_folders(). A folder a saved file once used stays after a Revert or a re-bake; the
+Revert report names it, for the user to delete when no .blend needs it. Only the files a bake
+writes are deleted, then the folder if it is empty.
 """
 import atexit
 import hashlib
@@ -32,8 +32,6 @@ from . import material_scan
 
 FOLDER_SUFFIX = ".ndfbake"
 PENDING_SUFFIX = ".pending"
-USERS_FILE = "blend_files.txt"
-PINNED = "pinned: "  # a USERS_FILE line for a .blend whose path is unknown (a Save Copy)
 # Bounds the search for a free folder: that many versions of one material on disk at once means
 # something else is wrong (a folder that cannot be deleted), and the user should hear of it.
 MAX_FOLDER_VERSIONS = 100
@@ -61,7 +59,7 @@ def _key(path):
 
 
 def is_bake_file(name):
-    return name in ("report.json", USERS_FILE) or re.fullmatch(
+    return name == "report.json" or re.fullmatch(
         r"level\d+_(lobe|color)\d+\.exr|atlas_lobe\d+\.exr", name) is not None
 
 
@@ -84,40 +82,6 @@ def folder_users(folder, but=None):
         if rec and _key(record_folder(rec)) == _key(folder):
             users.append(material)
     return users
-
-
-def _images_used_in(folder):
-    """The images of files in `folder` that something still renders with: a user other than a node
-    group, or a node group that is itself so used. (ID.users is not enough: after Material.copy()
-    a removed group node can leave its group counted as used.)"""
-    images = [image for image in bpy.data.images if image.source == "FILE" and image.filepath
-              and _key(os.path.dirname(material_scan.image_file_path(image))) == _key(folder)]
-    if not images:
-        return []
-    users = bpy.data.user_map(subset=images + list(bpy.data.node_groups))
-
-    def used(datablock, seen):
-        if datablock in seen:
-            return False
-        seen.add(datablock)
-        return any(not isinstance(user, bpy.types.NodeTree) or used(user, seen) for user in users.get(datablock, ()))
-    return [image for image in images if used(image, set())]
-
-
-def folders_in_use():
-    """{key: absolute path} of the folder of every bake in this .blend and of every lobe image
-    something renders with."""
-    folders = {}
-    for rec in map(material_scan.record, bpy.data.materials):
-        folder = record_folder(rec) if rec else ""
-        if folder:
-            folders[_key(folder)] = folder
-    for image in bpy.data.images:
-        if image.source == "FILE" and image.filepath and image.get("ndfbake") is not None:
-            folder = os.path.dirname(material_scan.image_file_path(image))
-            if _key(folder) not in folders and _images_used_in(folder):
-                folders[_key(folder)] = folder
-    return folders
 
 
 # ---- new folders ---------------------------------------------------------------------------------
@@ -154,75 +118,56 @@ def release(absolute):
     _reserved.discard(_key(absolute))
 
 
-# ---- the session's folders, deleted when the file is closed -------------------------------------
+# ---- the session's folders, deleted when the file is closed if no save ever used them ----------
 
-_session = set()      # absolute folders this session's bakes wrote or let go
-_saved_use = set()    # keys of the folders the file as last saved (or loaded) uses
-_before_save = [None]  # the open file's (inode, mtime) before a save: unchanged after it, a Save Copy
-
-
-def track(folder):
-    """A folder this session let go (a re-bake, a Revert): a candidate for deletion when the file
-    is closed."""
-    if folder:
-        _session.add(os.path.normpath(folder))
+_created = {}      # key: absolute path of each folder this session's bakes wrote
+_saved = set()     # keys of the folders something used while this session saved a .blend
 
 
-def _read_users(folder):
-    try:
-        with open(os.path.join(folder, USERS_FILE), encoding="utf-8") as f:
-            return [line.rstrip("\n") for line in f if line.strip()]
-    except OSError:
-        return None
+def created(folder):
+    """A folder this session's bake wrote: deleted when the file is closed unless a save used it."""
+    _created[_key(folder)] = os.path.normpath(folder)
 
 
-def _add_user(folder, line):
-    users = _read_users(folder) or []
-    if line in users:
-        return
-    path = os.path.join(folder, USERS_FILE)
-    temporary = path + ".tmp"
-    try:
-        with open(temporary, "w", encoding="utf-8") as f:
-            f.write("".join(u + "\n" for u in users + [line]))
-        os.replace(temporary, path)
-    except OSError as e:
-        print("ndfbake: could not note %s in %s: %s" % (line, path, e.strerror))
+def _referenced():
+    """Keys of the folders this .blend refers to: every bake record's and every image's file's
+    (whoever uses the image: a fake user or an asset keeps it in the saved file too)."""
+    folders = set()
+    for material in bpy.data.materials:
+        rec = material_scan.record(material)
+        if isinstance(rec, dict):
+            try:
+                folders.add(_key(record_folder(rec)))
+            except (AttributeError, TypeError, ValueError):
+                pass  # a record someone else wrote: it names no folder of ours
+    for image in bpy.data.images:
+        if image.source == "FILE" and image.filepath:
+            folders.add(_key(os.path.dirname(material_scan.image_file_path(image))))
+    return folders
 
 
 def note_save():
-    """After a save: every folder in use now lists this .blend (a Save Copy, which leaves the open
-    file as it was on disk, pins them instead), and becomes what the saved file uses."""
-    blend = bpy.data.filepath
-    copy = _file_identity(blend) in (None, _before_save[0])
-    in_use = folders_in_use()
-    for folder in in_use.values():
-        if os.path.isdir(folder):
-            _add_user(folder, PINNED + "a copy of " + blend if copy else os.path.normpath(blend))
-    if not copy:
-        _saved_use.clear()
-        _saved_use.update(in_use)
+    """After any save (Save As and Save Copy too): the folders used now may be in a .blend on disk
+    from now on, and are never deleted automatically."""
+    try:
+        referenced = _referenced()
+    except Exception as e:  # never lose track: treat every folder of this session as saved
+        print("ndfbake: keeping every lobe folder of this session (%s: %s)" % (type(e).__name__, e))
+        referenced = set(_created)
+    _saved.update(referenced & set(_created))
 
 
 def delete_unused_folders(closing=True):
-    """Deletes this session's folders that the file as last saved does not use and no other .blend
-    lists (see above); with closing=False (a script that goes on), also those the file in memory
-    uses are kept. Returns (files removed, [files not removed])."""
-    current = _key(bpy.data.filepath) if bpy.data.filepath else ""
-    keep = set(_saved_use) | (set() if closing else set(folders_in_use()))
+    """Deletes the folders this session's bakes wrote that no save used; with closing=False (a
+    script that goes on) also keeps those this file uses now. Returns (files removed, [not
+    removed])."""
+    keep = set(_saved) | (set() if closing else _referenced())
     removed, left = 0, []
-    for folder in sorted(_session):
-        if _key(folder) in keep or not os.path.isdir(folder):
-            if not os.path.isdir(folder):
-                _session.discard(folder)
-            continue
-        users = _read_users(folder)
-        if users is None and not _created_this_session(folder):
-            continue  # an older bake's folder: who uses it is unknown
-        if any(u.startswith(PINNED) or (_key(u) != current and os.path.exists(u)) for u in users or []):
+    for key, folder in sorted(_created.items()):
+        if key in keep:
             continue
         try:
-            names = os.listdir(folder)
+            names = os.listdir(folder) if os.path.isdir(folder) else []
         except OSError as e:
             left.append("%s (%s)" % (folder, e.strerror))
             continue
@@ -230,22 +175,19 @@ def delete_unused_folders(closing=True):
         removed += count
         left += failed
         if not failed:
-            _session.discard(folder)
+            del _created[key]
     return removed, left
 
 
-_created = set()
+def deleted_at_close(folder):
+    """Whether closing the file will delete `folder` (this session wrote it, no save used it)."""
+    return _key(folder) in _created and _key(folder) not in _saved
 
 
-def created(folder):
-    """A folder this session's bake wrote: a candidate for deletion when the file is closed, also
-    before any save has listed who uses it."""
-    _created.add(_key(folder))
-    track(folder)
-
-
-def _created_this_session(folder):
-    return _key(folder) in _created
+def forget_session():
+    """Nothing of this session is deleted any more (the add-on is being turned off)."""
+    _created.clear()
+    _saved.clear()
 
 
 def delete_bake_files(folder, names):
@@ -270,19 +212,14 @@ def delete_bake_files(folder, names):
     return removed, left
 
 
-def _file_identity(path):
-    """(inode, mtime in ns) of a file, None if it is not there: Blender saves through a temporary
-    file renamed into place, so a real save changes both."""
+def _close_session():
     try:
-        st = os.stat(path)
-    except OSError:
-        return None
-    return st.st_ino, st.st_mtime_ns
-
-
-@persistent
-def _on_save_pre(*_):
-    _before_save[0] = _file_identity(bpy.data.filepath) if bpy.data.filepath else ("unsaved",)
+        removed, left = delete_unused_folders(closing=True)
+        if left:
+            print("ndfbake: could not delete %s" % ", ".join(left))
+    except Exception as e:  # a handler must not raise into Blender's file loading or exit
+        print("ndfbake: lobe folder cleanup failed (%s: %s)" % (type(e).__name__, e))
+    forget_session()
 
 
 @persistent
@@ -295,48 +232,35 @@ def _on_load_pre(*_):
     _close_session()
 
 
-@persistent
-def _on_load_post(*_):
-    _saved_use.clear()
-    _saved_use.update(folders_in_use())
+def _on_exit():
+    _close_session()
 
 
-def _close_session():
-    removed, left = delete_unused_folders(closing=True)
-    if left:
-        print("ndfbake: could not delete %s" % ", ".join(left))
-    _session.clear()
-    _created.clear()
-
-
-_HANDLERS = (("save_pre", _on_save_pre), ("save_post", _on_save_post), ("load_pre", _on_load_pre),
-             ("load_post", _on_load_post))
-_installed = [False]
+_HANDLERS = (("save_post", _on_save_post), ("load_pre", _on_load_pre))
 
 
 def install_handlers():
-    """Called when the add-on is imported or registered: from then on every save, load and the
-    exit keep the books. What the file uses now is what it uses as saved: nothing of ndfbake's
-    can have changed it before this module was there."""
+    """Called when the add-on is imported or registered: from then on every save and the closing
+    of the file (load, exit) keep the books. A reloaded module replaces its earlier handlers."""
     for name, handler in _HANDLERS:
         handlers = getattr(bpy.app.handlers, name)
-        if handler not in handlers:
-            handlers.append(handler)
-    if not _installed[0]:
-        _installed[0] = True
-        atexit.register(_close_session)
-        try:
-            _on_load_post()
-        except AttributeError:
-            pass  # bpy.data is not open yet while add-ons register at startup: load_post will do it
+        for old in [h for h in handlers if getattr(h, "__module__", None) == __name__
+                    and h.__name__ == handler.__name__]:
+            handlers.remove(old)
+        handlers.append(handler)
+    atexit.unregister(_on_exit)
+    atexit.register(_on_exit)
 
 
 def remove_handlers():
-    """For the add-on's unregister()."""
+    """For the add-on's unregister(): the handlers go and this session's folders are kept."""
     for name, handler in _HANDLERS:
         handlers = getattr(bpy.app.handlers, name)
-        if handler in handlers:
-            handlers.remove(handler)
+        for old in [h for h in handlers if getattr(h, "__module__", None) == __name__
+                    and h.__name__ == handler.__name__]:
+            handlers.remove(old)
+    atexit.unregister(_on_exit)
+    forget_session()
 
 
 install_handlers()

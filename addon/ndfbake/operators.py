@@ -9,13 +9,13 @@
   one after another on the calling thread; from the UI, modal like ndfbake.bake, every native bake
   into a pending folder and all finished together, so that Esc leaves every material as it was.
 - ndfbake.revert: undoes the bake of the active material (or `material=`); the lobe textures are
-  deleted when the file is closed, if no saved .blend uses them (lobe_folders.py).
+  deleted when the file is closed if no save used them (lobe_folders.py).
 Failures are reported as one ERROR line each; from Python, bpy.ops raises RuntimeError then.
 """
 import bpy
 from bpy.props import StringProperty
 
-from . import bake
+from . import bake, lobe_folders
 
 # The job the Bake button is running (one at a time), for the panel.
 running_job = None
@@ -231,8 +231,8 @@ class NDFBAKE_OT_bake_all(_ModalBakes, bpy.types.Operator):
 class NDFBAKE_OT_revert(bpy.types.Operator):
     bl_idname = "ndfbake.revert"
     bl_label = "Revert"
-    bl_description = ("Restore the material's original nodes; its lobe textures are deleted when the file is "
-                      "closed, if no saved .blend uses them")
+    bl_description = ("Restore the material's original nodes (the lobe textures stay on disk while a saved "
+                      ".blend may use them)")
     bl_options = {"REGISTER", "UNDO"}
 
     material: StringProperty(name="Material", description="Material to revert; empty: the active material")
@@ -247,9 +247,12 @@ class NDFBAKE_OT_revert(bpy.types.Operator):
         if kept_for:
             self.report({"INFO"}, "ndfbake: %s reverted; its lobe textures stay, %s use%s them" % (
                 material.name, ", ".join(kept_for), "s" if len(kept_for) == 1 else ""))
-        else:
+        elif folder and lobe_folders.deleted_at_close(folder):
             self.report({"INFO"}, "ndfbake: %s reverted; its lobe textures (%s) are deleted when the file is "
-                                  "closed, if no saved .blend uses them" % (material.name, folder or "none"))
+                                  "closed" % (material.name, folder))
+        else:
+            self.report({"INFO"}, "ndfbake: %s reverted; its lobe textures stay in %s, which a saved .blend "
+                                  "used: delete the folder when no .blend needs it" % (material.name, folder or "?"))
         return {"FINISHED"}
 
 

@@ -6,8 +6,8 @@ A .blend with two rendered materials, "Good" (a PNG normal map) and "Bad" (its n
 Space is sRGB), and an unrendered "Hidden" one. The script runs in a separate `blender -b`:
 - baking everything the scene needs exits 1, prints the baked material's report and the other's
   specific failure, saves the file: Good is baked, Bad and Hidden are exactly as they were;
-- naming Good alone exits 0 (a new folder; the save deletes the replaced one); --revert restores
-  Good exactly and its save deletes the folder;
+- naming Good alone exits 0 (a new folder; the replaced one stays, the first run's saved file used
+  it); --revert restores Good exactly (the folders stay for the same reason);
 - an unknown material exits 2, changing nothing.
 """
 import os
@@ -55,14 +55,15 @@ def test_command_line_bake_and_revert():
         code, out = h.run_bake_blend(blend, "--material", "Good", "--max-lobes", "1")
         h.expect(code == 0, "re-bake of Good: exit %d\n%s" % (code, out))
         h.expect("baked Good into //Good~2.ndfbake: 1 lobe," in out, out)
-        h.expect(not os.path.exists(os.path.join(directory, "Good.ndfbake")), "the save left the replaced folder")
+        h.expect(os.path.isdir(os.path.join(directory, "Good.ndfbake")),
+                 "the replaced folder, which the file saved by the first run used, was deleted")
 
         code, out = h.run_bake_blend(blend, "--revert")
         h.expect(code == 0, "revert: exit %d\n%s" % (code, out))
         h.expect("reverted Good" in out, out)
         h.expect(reopen(blend) == original, "the reverted file differs from the original")
-        h.expect(not [f for f in os.listdir(directory) if f.endswith(".ndfbake")], "lobe folder left: %s"
-                 % os.listdir(directory))
+        h.expect(sorted(f for f in os.listdir(directory) if f.endswith(".ndfbake")) == ["Good.ndfbake", "Good~2.ndfbake"],
+                 "lobe folders after revert: %s (saved files used both: they stay)" % os.listdir(directory))
 
         mtime = os.path.getmtime(blend)
         code, out = h.run_bake_blend(blend, "--material", "Nope")
