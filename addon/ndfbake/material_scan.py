@@ -120,9 +120,10 @@ def record(material):
     if not raw:
         return None
     try:
-        return json.loads(raw)
+        rec = json.loads(raw)
     except (TypeError, ValueError):
         return None
+    return rec if isinstance(rec, dict) else None  # a property of that name someone else wrote
 
 
 def image_file_path(image):
