@@ -135,11 +135,11 @@ def _referenced():
     folders = set()
     for material in bpy.data.materials:
         rec = material_scan.record(material)
-        if isinstance(rec, dict):
+        if rec:
             try:
                 folders.add(_key(record_folder(rec)))
             except (AttributeError, TypeError, ValueError):
-                pass  # a record someone else wrote: it names no folder of ours
+                pass  # a damaged record names no folder of ours
     for image in bpy.data.images:
         if image.source == "FILE" and image.filepath:
             folders.add(_key(os.path.dirname(material_scan.image_file_path(image))))
