@@ -17,8 +17,9 @@ folder is deleted only if no .blend can know it: this session's bake wrote it, a
 session (any file, copies included) happened while a material or an image used it. That happens
 when the file is closed (another file opened, File > Revert, quit) or, for scripts,
 delete_unused_folders(). A folder a saved file once used stays after a Revert or a re-bake; the
-Revert report names it, for the user to delete when no .blend needs it. Only the files a bake
-writes are deleted, then the folder if it is empty.
+Revert report names it, and the panel's "Delete Unused Lobe Folders" (unused_folders) lists the
+folders beside the .blend that this file does not use, for the user to delete once no other
+.blend needs them. Only the files a bake writes are deleted, then the folder if it is empty.
 """
 import atexit
 import hashlib
@@ -177,6 +178,21 @@ def delete_unused_folders(closing=True):
         if not failed:
             del _created[key]
     return removed, left
+
+
+def unused_folders():
+    """The lobe folders beside this .blend (by their suffix) that nothing in this file uses, for
+    the user to delete (ndfbake.delete_unused_folders): other .blend files may still use them."""
+    if not bpy.data.filepath:
+        return []
+    parent = os.path.dirname(os.path.abspath(bpy.data.filepath))
+    used = _referenced()
+    folders = []
+    for name in sorted(os.listdir(parent)):
+        path = os.path.join(parent, name)
+        if name.endswith(FOLDER_SUFFIX) and os.path.isdir(path) and _key(path) not in used:
+            folders.append(path)
+    return folders
 
 
 def deleted_at_close(folder):

@@ -10,8 +10,12 @@
   into a pending folder and all finished together, so that Esc leaves every material as it was.
 - ndfbake.revert: undoes the bake of the active material (or `material=`); the lobe textures are
   deleted when the file is closed if no save used them (lobe_folders.py).
+- ndfbake.delete_unused_folders: deletes, after a confirmation dialog listing them, the lobe
+  textures of the folders beside the .blend that the file does not use.
 Failures are reported as one ERROR line each; from Python, bpy.ops raises RuntimeError then.
 """
+import os
+
 import bpy
 from bpy.props import StringProperty
 
@@ -256,4 +260,38 @@ class NDFBAKE_OT_revert(bpy.types.Operator):
         return {"FINISHED"}
 
 
-classes = (NDFBAKE_OT_bake, NDFBAKE_OT_bake_all, NDFBAKE_OT_revert)
+class NDFBAKE_OT_delete_unused_folders(bpy.types.Operator):
+    bl_idname = "ndfbake.delete_unused_folders"
+    bl_label = "Delete Unused Lobe Folders"
+    bl_description = ("Delete the lobe textures in the .ndfbake folders beside this .blend that none of its "
+                      "materials and images use (other .blend files may: the dialog lists the folders)")
+    bl_options = {"REGISTER"}  # files on disk: not undoable, hence the confirmation dialog
+
+    def invoke(self, context, event):
+        if not lobe_folders.unused_folders():
+            self.report({"INFO"}, "ndfbake: no unused lobe folder beside this .blend")
+            return {"CANCELLED"}
+        return context.window_manager.invoke_props_dialog(self, width=480)
+
+    def draw(self, context):
+        layout = self.layout
+        layout.label(text="Delete the lobe textures in these folders?", icon="ERROR")
+        for folder in lobe_folders.unused_folders():
+            layout.label(text=os.path.basename(folder), icon="FILE_FOLDER")
+        layout.label(text="No material of this file uses them; another .blend beside it might.")
+
+    def execute(self, context):
+        removed, left = 0, []
+        folders = lobe_folders.unused_folders()
+        for folder in folders:
+            count, failed = lobe_folders.delete_bake_files(folder, os.listdir(folder))
+            removed += count
+            left += failed
+        if left:
+            self.report({"WARNING"}, "ndfbake: could not delete %s" % ", ".join(left))
+        else:
+            self.report({"INFO"}, "ndfbake: deleted %d files in %d unused lobe folders" % (removed, len(folders)))
+        return {"FINISHED"}
+
+
+classes = (NDFBAKE_OT_bake, NDFBAKE_OT_bake_all, NDFBAKE_OT_revert, NDFBAKE_OT_delete_unused_folders)

@@ -87,6 +87,7 @@ class NDFBAKE_PT_material(bpy.types.Panel):
         revert_row.enabled = baked and job is None
         revert_row.operator(operators.NDFBAKE_OT_revert.bl_idname, icon="LOOP_BACK")
         layout.operator(operators.NDFBAKE_OT_bake_all.bl_idname, icon="MATERIAL")
+        layout.operator(operators.NDFBAKE_OT_delete_unused_folders.bl_idname, icon="TRASH")
 
         if baked:
             rec = material_scan.record(material)

@@ -19,6 +19,8 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 - Folders are deleted only when the file is closed (h.close_file), and only those no save used:
   not the one the file before a Save As uses, nor one a Save Copy uses, nor the folder of a
   library a baked material was appended from; Ctrl-Z after a save finds the files.
+- ndfbake.delete_unused_folders deletes the bake files of the folders beside the .blend that the
+  file does not use (a saved, replaced bake's), nothing else.
 """
 import os
 import sys
@@ -301,6 +303,30 @@ def test_undo_after_a_save_finds_the_files():
         h.cleanup(directory)
 
 
+def test_delete_unused_folders_deletes_only_what_this_file_does_not_use():
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        bpy.ops.wm.save_mainfile()
+        bake.bake_material(material, bake.BakeSettings(max_lobes=1))  # Bumpy~2; Bumpy.ndfbake was saved
+        bpy.ops.wm.save_mainfile()
+        h.close_file()
+        h.expect(os.path.isdir(os.path.join(directory, "Bumpy.ndfbake")), "a folder a save used went at close")
+        other = os.path.join(directory, "Notes.ndfbake")  # not ours: only bake files would go
+        os.makedirs(other)
+        with open(os.path.join(other, "notes.txt"), "w") as f:
+            f.write("mine")
+        h.expect(bpy.ops.ndfbake.delete_unused_folders() == {"FINISHED"}, "the operator did not run")
+        h.expect(not os.path.exists(os.path.join(directory, "Bumpy.ndfbake")), "the unused folder is left")
+        h.expect(os.path.isdir(os.path.join(directory, "Bumpy~2.ndfbake")), "the folder in use was deleted")
+        h.expect(os.listdir(other) == ["notes.txt"], "a file that is not a bake file was deleted")
+        _images_load(bpy.data.materials["Bumpy"])
+    finally:
+        h.cleanup(directory)
+
+
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_names_that_clash_on_disk_get_folders_of_their_own,
@@ -311,4 +337,5 @@ if __name__ == "__main__":
            test_undo_after_rebake_and_revert_finds_the_files,
            test_save_as_elsewhere_keeps_the_textures,
            test_folders_other_blend_files_use_are_kept,
-           test_undo_after_a_save_finds_the_files])
+           test_undo_after_a_save_finds_the_files,
+           test_delete_unused_folders_deletes_only_what_this_file_does_not_use])
