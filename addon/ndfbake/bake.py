@@ -27,8 +27,10 @@ Files (choices the design leaves open):
   level the node group computes from the camera distance, the view angle and the constants
   scene_lod.py measured (texel density, pixel angle), in both engines; "RENDERER" samples
   level 0 with Linear interpolation and leaves filtering to the renderer (EEVEE MIP-maps it; Cycles
-  only averages its pixel samples). A material no camera sees, a scene without a camera, or a
-  texture with box, sphere or tube projection (no UV for the atlas lookup) gets "RENDERER".
+  only averages its pixel samples). A material no camera sees, a scene without a camera, a
+  texture with box, sphere or tube projection (no UV for the atlas lookup) or with coordinates
+  the nodes do not tie to one UV map (scene_lod.texture_uv) gets "RENDERER", and the summary
+  says why.
   README gives the measurement behind the default.
 """
 import json
