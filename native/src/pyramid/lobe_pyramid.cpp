@@ -38,17 +38,11 @@ void LobePyramid::texel(int level, int x, int y, std::span<VmfLobe> out) const
     std::copy_n(&l.lobes[t * size_t(slots)], size_t(slots), out.begin());
 }
 
-void LobePyramid::texel_lobes(int level, int x, int y, std::vector<VmfLobe>& out) const
-{
-    out.resize(static_cast<size_t>(slots));
-    texel(level, x, y, out);
-    std::erase_if(out, [](const VmfLobe& l) { return !(l.alpha > 0.0f); });
-}
-
 std::vector<VmfLobe> LobePyramid::texel_lobes(int level, int x, int y) const
 {
-    std::vector<VmfLobe> lobes;
-    texel_lobes(level, x, y, lobes);
+    std::vector<VmfLobe> lobes(static_cast<size_t>(slots));
+    texel(level, x, y, lobes);
+    std::erase_if(lobes, [](const VmfLobe& l) { return !(l.alpha > 0.0f); });
     return lobes;
 }
 

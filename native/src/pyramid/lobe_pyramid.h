@@ -69,9 +69,8 @@ public:
     LevelSize size(int level) const { return levels[size_t(level)].size; }
     // The `slots` lobes of a texel, empty slots with α = 0.
     void texel(int level, int x, int y, std::span<VmfLobe> out) const;
-    // The non-empty lobes of a texel; the second form reuses `out` (loops over every texel).
+    // The non-empty lobes of a texel.
     std::vector<VmfLobe> texel_lobes(int level, int x, int y) const;
-    void texel_lobes(int level, int x, int y, std::vector<VmfLobe>& out) const;
     int lobe_count(int level, int x, int y) const;
     // Whether any texel of any level has a lobe in slot j: an unused slot's textures are zero
     // everywhere, and a shader can leave it out.
