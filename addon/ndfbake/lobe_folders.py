@@ -163,10 +163,19 @@ def delete_unused_folders(closing=True):
     script that goes on) also keeps those this file uses now. Returns (files removed, [not
     removed])."""
     keep = set(_saved) | (set() if closing else _referenced())
+    doomed = [folder for key, folder in sorted(_created.items()) if key not in keep]
+    removed, left = delete_folders(doomed)
+    for folder in doomed:
+        if not os.path.isdir(folder):
+            del _created[_key(folder)]
+    return removed, left
+
+
+def delete_folders(folders):
+    """Deletes the bake files of each folder (then the folder, if empty). Returns (files removed,
+    [what could not be removed])."""
     removed, left = 0, []
-    for key, folder in sorted(_created.items()):
-        if key in keep:
-            continue
+    for folder in folders:
         try:
             names = os.listdir(folder) if os.path.isdir(folder) else []
         except OSError as e:
@@ -175,8 +184,6 @@ def delete_unused_folders(closing=True):
         count, failed = delete_bake_files(folder, names)
         removed += count
         left += failed
-        if not failed:
-            del _created[key]
     return removed, left
 
 
@@ -255,27 +262,28 @@ def _on_exit():
 _HANDLERS = (("save_post", _on_save_post), ("load_pre", _on_load_pre))
 
 
-def install_handlers():
-    """Called when the add-on is imported or registered: from then on every save and the closing
-    of the file (load, exit) keep the books. A reloaded module replaces its earlier handlers."""
+def _remove_our_handlers():
+    """This module's handlers, also those of an earlier load of it (a reloaded add-on)."""
     for name, handler in _HANDLERS:
         handlers = getattr(bpy.app.handlers, name)
         for old in [h for h in handlers if getattr(h, "__module__", None) == __name__
                     and h.__name__ == handler.__name__]:
             handlers.remove(old)
-        handlers.append(handler)
     atexit.unregister(_on_exit)
+
+
+def install_handlers():
+    """Called when the add-on is imported or registered: from then on every save and the closing
+    of the file (load, exit) keep the books. A reloaded module replaces its earlier handlers."""
+    _remove_our_handlers()
+    for name, handler in _HANDLERS:
+        getattr(bpy.app.handlers, name).append(handler)
     atexit.register(_on_exit)
 
 
 def remove_handlers():
     """For the add-on's unregister(): the handlers go and this session's folders are kept."""
-    for name, handler in _HANDLERS:
-        handlers = getattr(bpy.app.handlers, name)
-        for old in [h for h in handlers if getattr(h, "__module__", None) == __name__
-                    and h.__name__ == handler.__name__]:
-            handlers.remove(old)
-    atexit.unregister(_on_exit)
+    _remove_our_handlers()
     forget_session()
 
 

@@ -281,12 +281,8 @@ class NDFBAKE_OT_delete_unused_folders(bpy.types.Operator):
         layout.label(text="No material of this file uses them; another .blend beside it might.")
 
     def execute(self, context):
-        removed, left = 0, []
         folders = lobe_folders.unused_folders()
-        for folder in folders:
-            count, failed = lobe_folders.delete_bake_files(folder, os.listdir(folder))
-            removed += count
-            left += failed
+        removed, left = lobe_folders.delete_folders(folders)
         if left:
             self.report({"WARNING"}, "ndfbake: could not delete %s" % ", ".join(left))
         else:
