@@ -722,25 +722,30 @@ def carry_animation(material_tree, principled, node):
     _copy_input_animation(material_tree, paths, move=False)
 
 
+def _copy_input(links, source, target):
+    """Makes input socket `target` take what `source` takes: the same link (muted or not), or, with
+    none, its value. Touches nothing that already matches."""
+    if source.is_linked:
+        link = source.links[0]
+        if not (target.is_linked and target.links[0].from_socket == link.from_socket
+                and target.links[0].is_muted == link.is_muted):
+            links.new(link.from_socket, target).is_muted = link.is_muted
+        return
+    for link in list(target.links):
+        links.remove(link)
+    if _value(target) != _value(source):
+        target.default_value = source.default_value
+
+
 def write_back_inputs(material_tree, node, principled):
     """The group node's inputs as the user left them (values, links, keyframes, drivers) go back to
     the Principled BSDF before the node goes, so that Revert keeps the user's edits on the node and
     a re-bake starts from them. Unedited, the Principled is left exactly as it was."""
-    links = material_tree.links
     paths = {}
     for i, j in _shared_inputs(principled, node).items():
-        target, source = principled.inputs[i], node.inputs[j]
-        if source.is_linked:
-            link = source.links[0]
-            if not (target.is_linked and target.links[0].from_socket == link.from_socket
-                    and target.links[0].is_muted == link.is_muted):
-                links.new(link.from_socket, target).is_muted = link.is_muted
-            continue
-        for link in list(target.links):
-            links.remove(link)
-        if _value(target) != _value(source):
-            target.default_value = source.default_value
-        paths[_input_path(node, j)] = _input_path(principled, i)
+        _copy_input(material_tree.links, node.inputs[j], principled.inputs[i])
+        if not node.inputs[j].is_linked:
+            paths[_input_path(node, j)] = _input_path(principled, i)
     _copy_input_animation(material_tree, paths, move=True)
 
 
@@ -823,18 +828,8 @@ def _wire_group_node(material_tree, node, group_tree, principled, normal_map, im
     node.width = max(node.width, 220)
     node.parent = principled.parent
     for socket in carried_inputs(principled):
-        target = node.inputs[socket.name]
-        if socket.is_linked:
-            link = socket.links[0]
-            new = links.new(link.from_socket, target)
-            new.is_muted = link.is_muted
-        else:
-            target.default_value = _value(socket)
-    strength = normal_map.inputs["Strength"]
-    if strength.is_linked:
-        links.new(strength.links[0].from_socket, node.inputs["Normal Strength"])
-    else:
-        node.inputs["Normal Strength"].default_value = strength.default_value
+        _copy_input(links, socket, node.inputs[socket.name])
+    _copy_input(links, normal_map.inputs["Strength"], node.inputs["Normal Strength"])
     if "Vector" in node.inputs:
         links.new(image_texture.inputs["Vector"].links[0].from_socket, node.inputs["Vector"])
 
