@@ -323,7 +323,7 @@ def _relative(path):
 
 def _load_lobe_images(material_name, paths, pack, created):
     """Lobe images (Non-Color, channel-packed alpha: A is data, α·r_z), named "<material> lobe j",
-    all new (a bake's folder is new, see lobe_folder); their names are appended to `created` as
+    all new (a bake's folder is new: lobe_folders.new_folder); their names are appended to `created` as
     they are made, for the caller to remove on an error."""
     images = []
     for j, path in enumerate(paths):
@@ -420,7 +420,6 @@ def finish(job):
         raise BakeError("INTERNAL", "building the node group of '%s' failed (%s: %s); the material is as it was "
                         "before baking" % (material.name, type(e).__name__, e)) from e
 
-    files = report.get("files") or sorted(os.listdir(job.out_dir))
     summary = summarize(report, job.seconds, len(images))
     if job.lod is not None:
         summary += "; level of detail from the camera (%.1f texels per unit, largest footprint %.0f texels)" % (
@@ -430,7 +429,6 @@ def finish(job):
     rec = {
         "version": RECORD_VERSION,
         "folder": job.folder,
-        "files": [f for f in files if lobe_folders.is_bake_file(f)],
         "images": sorted(created),
         "targets": targets,
         "lobes": len(images),
