@@ -23,9 +23,9 @@ camera in the scene, gives the levels the bake must fit: up to the ceiling of th
 plus one for the blend between two levels.
 
 A Mapping node between the UV map and the texture (tiling) scales texels_per_unit by how often
-the texture repeats per unit of UV, measured on the UV map the texture reads (texture_uv). Where the texture coordinates come from
-anything else (Generated, Object, math nodes) the density is unknown, and the bake leaves the
-level of detail to the renderer.
+the texture repeats per unit of UV, measured on the UV map the texture reads (texture_uv). Where
+the texture coordinates come from anything else (Generated, Object, math nodes) the density is
+unknown, and the bake leaves the level of detail to the renderer.
 """
 import math
 from dataclasses import dataclass
@@ -150,10 +150,10 @@ def _material_faces(obj, material, count, attribute):
 
 
 def _uv_layer(mesh, uv_map):
-    """The UV map a Normal Map node reads: the named one, or with no name the one active for rendering."""
-    if uv_map:
-        return mesh.uv_layers.get(uv_map)
-    return next((layer for layer in mesh.uv_layers if layer.active_render), mesh.uv_layers.active)
+    """The UV map a node naming `uv_map` reads: that one, or with no name (or a missing one) the
+    one active for rendering."""
+    named = mesh.uv_layers.get(uv_map) if uv_map else None
+    return named or next((layer for layer in mesh.uv_layers if layer.active_render), mesh.uv_layers.active)
 
 
 def _world_mesh(obj, depsgraph, uv_map, material):
@@ -163,7 +163,7 @@ def _world_mesh(obj, depsgraph, uv_map, material):
     try:
         if mesh is None or not mesh.polygons or not mesh.uv_layers:
             return None
-        layer = _uv_layer(mesh, uv_map) or mesh.uv_layers.active
+        layer = _uv_layer(mesh, uv_map)
         nv, nl = len(mesh.vertices), len(mesh.loops)
         faces = _material_faces(obj, material, len(mesh.polygons), mesh.polygons)
         nf = len(mesh.polygons)
@@ -212,6 +212,22 @@ def footprints(positions, normals, camera, texels_per_unit):
     return footprint / np.maximum(facing, MIN_FACING) ** STRETCH
 
 
+def _mapping_repeat(node):
+    """How many times a Mapping node repeats the texture in the UV plane (1 when muted), or None
+    where its settings do not say (linked, rotated out of the plane, Vector or Normal type)."""
+    if node.mute:
+        return 1.0
+    rotation = node.inputs["Rotation"]
+    if node.vector_type not in ("POINT", "TEXTURE") or node.inputs["Scale"].is_linked or rotation.is_linked \
+            or any(abs(a) > 1e-6 for a in rotation.default_value[:2]):
+        return None
+    sx, sy = node.inputs["Scale"].default_value[:2]
+    scale = math.sqrt(abs(sx * sy))
+    if not scale > 0.0:
+        return None
+    return scale if node.vector_type == "POINT" else 1.0 / scale
+
+
 def texture_uv(texture):
     """(repeat, UV map) of an image texture node: which UV map it reads ("" for the one active
     for rendering: Vector unlinked or Texture Coordinate's UV; a UV Map node's name) and how many
@@ -222,17 +238,10 @@ def texture_uv(texture):
     node, output = material_scan.upstream(texture.inputs["Vector"])
     repeat = 1.0
     while node is not None and node.bl_idname == "ShaderNodeMapping":
-        if not node.mute:
-            if node.vector_type not in ("POINT", "TEXTURE") or node.inputs["Scale"].is_linked \
-                    or node.inputs["Rotation"].is_linked or any(abs(a) > 1e-6 for a in node.inputs["Rotation"].default_value[:2]):
-                return None
-            sx, sy = node.inputs["Scale"].default_value[:2]
-            scale = math.sqrt(abs(sx * sy))
-            if not scale > 0.0:
-                return None
-            repeat *= scale if node.vector_type == "POINT" else 1.0 / scale
-        if not node.inputs["Vector"].is_linked:
+        factor = _mapping_repeat(node)
+        if factor is None or not node.inputs["Vector"].is_linked:
             return None
+        repeat *= factor
         node, output = material_scan.upstream(node.inputs["Vector"])
     if node is None or (node.bl_idname == "ShaderNodeTexCoord" and output.name == "UV"):
         return repeat, ""
