@@ -184,20 +184,23 @@ def test_box_projection_leaves_filtering_to_the_renderer():
         h.cleanup(directory)
 
 
+def _undoable(operator, what):
+    """Runs an ndfbake operator on Bumpy and pushes the undo step a window pushes after an operator
+    with the UNDO flag (`blender -b` pushes none by itself)."""
+    h.expect(operator(material="Bumpy") == {"FINISHED"}, what)
+    bpy.ops.ed.undo_push(message=what)
+
+
 def test_undo_after_rebake_and_revert_finds_the_files():
     from ndfbake import bake, material_scan
     directory = h.temp_dir()
     try:
         h.baked_scene(directory)
-        # The undo steps a window pushes after each operator with the UNDO flag (`blender -b`
-        # pushes none by itself).
         bpy.ops.ed.undo_push(message="ndfbake test scene")
-        h.expect(bpy.ops.ndfbake.bake(material="Bumpy") == {"FINISHED"}, "bake")
-        bpy.data.materials["Bumpy"].ndfbake_settings.max_lobes = 1
-        bpy.ops.ed.undo_push(message="Bake")
+        _undoable(bpy.ops.ndfbake.bake, "bake")
         first = material_scan.record(bpy.data.materials["Bumpy"])["folder"]
-        h.expect(bpy.ops.ndfbake.bake(material="Bumpy") == {"FINISHED"}, "re-bake")
-        bpy.ops.ed.undo_push(message="Bake")
+        bpy.data.materials["Bumpy"].ndfbake_settings.max_lobes = 1
+        _undoable(bpy.ops.ndfbake.bake, "re-bake")
         second = material_scan.record(bpy.data.materials["Bumpy"])["folder"]
         h.expect(first != second, "the re-bake wrote into the first bake's folder %s" % first)
 
@@ -207,8 +210,7 @@ def test_undo_after_rebake_and_revert_finds_the_files():
         h.expect(rec and rec["folder"] == first and rec["lobes"] == 4, "Ctrl-Z did not bring back the first bake")
         h.expect(len(_images_load(material)) == 4, "the first bake's images")
 
-        h.expect(bpy.ops.ndfbake.revert(material="Bumpy") == {"FINISHED"}, "revert")
-        bpy.ops.ed.undo_push(message="Revert")
+        _undoable(bpy.ops.ndfbake.revert, "revert")
         h.expect(bpy.ops.ed.undo() == {"FINISHED"}, "Ctrl-Z after the revert")
         material = bpy.data.materials["Bumpy"]
         h.expect(bake.is_baked(material) and len(_images_load(material)) == 4, "Ctrl-Z after the revert")
@@ -287,13 +289,11 @@ def test_undo_after_a_save_finds_the_files():
     try:
         h.baked_scene(directory)
         bpy.ops.ed.undo_push(message="ndfbake test scene")
-        h.expect(bpy.ops.ndfbake.bake(material="Bumpy") == {"FINISHED"}, "bake")
-        bpy.ops.ed.undo_push(message="Bake")
+        _undoable(bpy.ops.ndfbake.bake, "bake")
         bpy.ops.wm.save_mainfile()
         first = material_scan.record(bpy.data.materials["Bumpy"])["folder"]
         bpy.data.materials["Bumpy"].ndfbake_settings.max_lobes = 1
-        h.expect(bpy.ops.ndfbake.bake(material="Bumpy") == {"FINISHED"}, "re-bake")
-        bpy.ops.ed.undo_push(message="Bake")
+        _undoable(bpy.ops.ndfbake.bake, "re-bake")
         bpy.ops.wm.save_mainfile()
         h.expect(bpy.ops.ed.undo() == {"FINISHED"}, "Ctrl-Z after the save")
         material = bpy.data.materials["Bumpy"]
