@@ -522,4 +522,5 @@ def revert(material):
     _remove_nodes(material, rec)
     _remove_images(rec.get("images", []))
     del material[RECORD_KEY]
+    lobe_folders.note_in_use()
     return folder, [m.name for m in lobe_folders.folder_users(folder)] if folder else []

@@ -17,10 +17,15 @@ Steps, driven by bpy.app.timers from Blender's own event loop:
 5. Bake All from the UI with a second material: Esc while the second material fits leaves both
    materials and all files as they were (the first one's finished bake is discarded); run again
    to the end, it bakes both.
+6. The second material is reverted and Blender quits without saving (wm.quit_blender): after
+   Blender writes quit.blend (File > Recover > Last Session) and the add-on's exit handler runs,
+   the folder of the bake quit.blend holds is still there and the reverted bake's folder is gone
+   (neither was ever saved). Checked by an atexit function that runs after the add-on's.
 The worker is held at its first "fit" progress call until the main thread has seen what it
 checks (a gate in BakeJob.run), so the test does not race the fit on a loaded machine.
 The process exits 0 when every check holds, 1 otherwise (printed).
 """
+import atexit
 import hashlib
 import os
 import sys
@@ -241,9 +246,37 @@ def _tick():
         h.expect(all(bake.is_baked(bpy.data.materials[n]) for n in ("Window", "Second")), "Bake All did not bake both")
         h.expect(not [n for n in os.listdir(state["dir"]) if n.endswith(lobe_folders.PENDING_SUFFIX)], "pending folders left")
         print("Bake All from the UI baked both materials", flush=True)
-        _finish(True, "modal bake, screenshot, Esc cancel, undo and Bake All work (%d UI ticks)" % state["ticks"])
+        _quit_without_saving()
     return 0.05
 
 
+def _quit_without_saving():
+    from ndfbake import bake, lobe_folders, material_scan
+    folders = {name: lobe_folders.record_folder(material_scan.record(bpy.data.materials[name]))
+               for name in ("Window", "Second")}
+    bake.revert(bpy.data.materials["Second"])
+    # quit.blend goes to Blender's temporary directory: this test's, not the user's.
+    bpy.context.preferences.filepaths.temporary_directory = state["dir"]
+    state["quit"] = {"kept": folders["Window"], "gone": folders["Second"],
+                     "recovery": os.path.join(state["dir"], "quit.blend")}
+    bpy.ops.wm.quit_blender()
+
+
+def _after_quit():
+    """Registered before the add-on is imported, so it runs after the add-on's exit handler."""
+    quit = state.get("quit")
+    if quit is None:
+        return
+    failures = [what for what, holds in (
+        ("no quit.blend was written", os.path.isfile(quit["recovery"])),
+        ("the folder quit.blend uses was deleted: %s" % quit["kept"], os.path.isdir(quit["kept"])),
+        ("the reverted bake's folder was kept: %s" % quit["gone"], not os.path.exists(quit["gone"]))) if not holds]
+    print("quit without saving: quit.blend written, the folder it uses kept, the reverted bake's folder "
+          "deleted" if not failures else "quit without saving: " + "; ".join(failures), flush=True)
+    _finish(not failures, "modal bake, screenshot, Esc cancel, undo, Bake All and quit work (%d UI ticks)"
+            % state["ticks"])
+
+
+atexit.register(_after_quit)
 h.run_window_test("test_addon_window", state, _tick)
 _install_gate()
