@@ -48,7 +48,7 @@ from dataclasses import dataclass
 
 import bpy
 
-from . import scene_lod
+from . import node_animation, scene_lod
 
 GROUP_VERSION = 1
 TAG = "ndfbake"                       # ID/custom property marking what this add-on created
@@ -643,66 +643,6 @@ def drive_lod_inputs(node, scene, camera_object):
         var.targets[0].data_path = path
 
 
-def _input_path(node, index):
-    return 'nodes["%s"].inputs[%d].default_value' % (bpy.utils.escape_identifier(node.name), index)
-
-
-def _copy_fcurve(action, source, data_path):
-    """A copy of `source` at `data_path` in `action`, replacing any curve there: its keys, their
-    handles and easing, its extrapolation and its modifiers (every writable setting)."""
-    existing = action.fcurves.find(data_path, index=source.array_index)
-    if existing is not None:
-        action.fcurves.remove(existing)
-    copy = action.fcurves.new(data_path, index=source.array_index,
-                              action_group=source.group.name if source.group else "")
-    copy.extrapolation = source.extrapolation
-    copy.keyframe_points.add(len(source.keyframe_points))
-    for key, original in zip(copy.keyframe_points, source.keyframe_points):
-        for attribute in ("co", "handle_left", "handle_right", "handle_left_type", "handle_right_type",
-                          "interpolation", "easing", "amplitude", "back", "period"):
-            setattr(key, attribute, getattr(original, attribute))
-    for modifier in source.modifiers:
-        new = copy.modifiers.new(modifier.type)
-        for prop in modifier.bl_rna.properties:
-            if not prop.is_readonly and prop.identifier not in ("type", "active"):
-                try:
-                    setattr(new, prop.identifier, getattr(modifier, prop.identifier))
-                except (AttributeError, TypeError, ValueError):
-                    pass  # a collection (envelope points): left at its default
-    copy.update()
-
-
-def _shared_action(material_tree):
-    """The tree's action where other materials use it too (Material.copy() shares it), else None."""
-    animation = material_tree.animation_data
-    action = animation.action if animation is not None else None
-    if action is None or len(bpy.data.user_map(subset=[action]).get(action, ())) <= 1:
-        return None
-    return action
-
-
-def _copy_input_animation(material_tree, paths, move):
-    """Copies the keyframes (of the tree's action) and drivers at each source data path of `paths`
-    to its target path; with `move`, the sources go (not the keyframes of an action other trees
-    share: theirs are the same curves). NLA strips are not followed."""
-    animation = material_tree.animation_data
-    if animation is None:
-        return
-    action = animation.action
-    shared = _shared_action(material_tree) is not None
-    for source in [f for f in action.fcurves if f.data_path in paths] if action else []:
-        _copy_fcurve(action, source, paths[source.data_path])
-        if move and not shared:
-            action.fcurves.remove(source)
-    for source in [f for f in animation.drivers if f.data_path in paths]:
-        existing = animation.drivers.find(paths[source.data_path], index=source.array_index)
-        if existing is not None:
-            animation.drivers.remove(existing)
-        animation.drivers.from_existing(src_driver=source).data_path = paths[source.data_path]
-        if move:
-            animation.drivers.remove(source)
-
-
 def _shared_inputs(principled, node):
     """{Principled input index: group node input index} for the inputs the group carries."""
     pairs = {}
@@ -716,10 +656,10 @@ def _shared_inputs(principled, node):
 def carry_animation(material_tree, principled, node):
     """Copies the keyframes and drivers of the Principled's unlinked inputs to the group node's
     inputs of the same name, which hold those values after the bake: an animated colour or emission
-    goes on animating."""
-    paths = {_input_path(principled, i): _input_path(node, j) for i, j in _shared_inputs(principled, node).items()
-             if not principled.inputs[i].is_linked}
-    _copy_input_animation(material_tree, paths, move=False)
+    goes on animating, and drivers that read those inputs read the node's."""
+    paths = {node_animation.input_path(principled, i): node_animation.input_path(node, j)
+             for i, j in _shared_inputs(principled, node).items() if not principled.inputs[i].is_linked}
+    node_animation.copy_input_animation(material_tree, paths, principled.name, move=False)
 
 
 def _copy_input(links, source, target):
@@ -745,25 +685,8 @@ def write_back_inputs(material_tree, node, principled):
     for i, j in _shared_inputs(principled, node).items():
         _copy_input(material_tree.links, node.inputs[j], principled.inputs[i])
         if not node.inputs[j].is_linked:
-            paths[_input_path(node, j)] = _input_path(principled, i)
-    _copy_input_animation(material_tree, paths, move=True)
-
-
-def _remove_animation(material_tree, node_name):
-    """Drops the drivers and keyframes of the named node's inputs (not the keyframes of an action
-    other trees share); and the tree's animation data when nothing else is left in it (the add-on
-    created it)."""
-    animation = material_tree.animation_data
-    if animation is None:
-        return
-    prefix = 'nodes["%s"]' % bpy.utils.escape_identifier(node_name)
-    for fcurve in [f for f in animation.drivers if f.data_path.startswith(prefix)]:
-        animation.drivers.remove(fcurve)
-    if animation.action is not None and _shared_action(material_tree) is None:
-        for fcurve in [f for f in animation.action.fcurves if f.data_path.startswith(prefix)]:
-            animation.action.fcurves.remove(fcurve)
-    if not animation.drivers and animation.action is None and not animation.nla_tracks:
-        material_tree.animation_data_clear()
+            paths[node_animation.input_path(node, j)] = node_animation.input_path(principled, i)
+    node_animation.copy_input_animation(material_tree, paths, node.name, move=True)
 
 
 def insert_group_node(material_tree, group_tree, principled, normal_map, image_texture):
@@ -865,7 +788,7 @@ def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee
     group_tree = node.node_tree if node is not None else None
     if keep_edits and node is not None and principled is not None:
         write_back_inputs(material_tree, node, principled)
-    _remove_animation(material_tree, node_name)
+    node_animation.remove_node_animation(material_tree, node_name)
     if node is not None:
         leaving = [link for output in node.outputs if output.type == "SHADER" for link in output.links]
         targets = [(link.to_socket, link.is_muted) for link in leaving]
@@ -884,14 +807,7 @@ def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee
                 material_tree.links.remove(link)
             material_tree.links.new(principled.outputs["BSDF"], socket).is_muted = muted
     if node is not None:
-        # Blender drops the removed node's keyframes from the tree's action, which would take them
-        # from the other materials sharing it: detach a shared action meanwhile.
-        shared = _shared_action(material_tree)
-        if shared is not None:
-            material_tree.animation_data.action = None
-        nodes.remove(node)
-        if shared is not None:
-            material_tree.animation_data.action = shared
+        node_animation.remove_node(material_tree, node)
     return group_tree
 
 

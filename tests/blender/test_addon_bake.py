@@ -429,10 +429,70 @@ def test_two_materials_sharing_an_action_bake_and_revert():
         h.cleanup(directory)
 
 
+def test_nla_strips_and_driver_variables_follow_the_inputs():
+    """Keyframes in an NLA strip's action (shared with a copy of the material) and a driver
+    elsewhere in the tree that reads a Principled input follow the inputs to the group node and
+    back: the strip animates the node, the driver reads the node's value, Revert restores the
+    paths, and the copy's strip keeps its curves."""
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        first = h.baked_scene(directory)
+        tree = first.node_tree
+        principled = tree.nodes["Principled BSDF"]
+        strength = principled.inputs["Emission Strength"]
+        for frame, value in ((1, 0.0), (11, 10.0)):
+            strength.default_value = value
+            strength.keyframe_insert("default_value", frame=frame)
+        animation = tree.animation_data
+        action = animation.action
+        animation.nla_tracks.new().strips.new("ramp", 1, action)
+        animation.action = None
+        reader = tree.nodes.new("ShaderNodeValue")
+        reader.name = "Reads Metallic"
+        driver = reader.outputs[0].driver_add("default_value").driver
+        driver.type = "AVERAGE"
+        variable = driver.variables.new()
+        variable.targets[0].id_type = "MATERIAL"
+        variable.targets[0].id = first
+        metallic_path = 'node_tree.nodes["Principled BSDF"].inputs[%d].default_value' % principled.inputs.find("Metallic")
+        variable.targets[0].data_path = metallic_path
+        second = first.copy()
+        h.plane_with(second, "Second")
+        bpy.ops.wm.save_mainfile()
+        h.expect(second.node_tree.animation_data.nla_tracks[0].strips[0].action == action, "the copy shares no strip")
+        curves_before = sorted(f.data_path for f in action.fcurves)
+        for material in (first, second):
+            bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        scene = bpy.context.scene
+        group = tree.nodes["ndfbake"]
+        group.inputs["Metallic"].default_value = 0.75
+        scene.frame_set(6)
+        for material in (first, second):
+            value = material.node_tree.nodes["ndfbake"].inputs["Emission Strength"].default_value
+            h.expect(abs(value - 5.0) < 0.6, "%s: the NLA strip does not animate the node (%g)" % (material.name, value))
+        h.expect(abs(reader.outputs[0].default_value - 0.75) < 1e-6,
+                 "the driver reads %g, not the node's Metallic 0.75" % reader.outputs[0].default_value)
+        bake.revert(first)
+        scene.frame_set(6)
+        h.expect(variable.targets[0].data_path == metallic_path, "Revert left the variable at %s"
+                 % variable.targets[0].data_path)
+        h.expect(abs(strength.default_value - 5.0) < 0.6, "after Revert the strip does not animate the Principled")
+        value = second.node_tree.nodes["ndfbake"].inputs["Emission Strength"].default_value
+        h.expect(abs(value - 5.0) < 0.6, "reverting the first material stopped the copy's strip (%g)" % value)
+        bake.revert(second)
+        h.expect(sorted(f.data_path for f in action.fcurves) == curves_before,
+                 "the strip's curves after both Reverts: %s" % sorted(f.data_path for f in action.fcurves))
+        h.expect(not [a for a in bpy.data.actions if a.name.startswith("ndfbake")], "a temporary action was left")
+    finally:
+        h.cleanup(directory)
+
+
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_bake_adds_only_the_group_and_bypass, test_failure_while_building_nodes_rolls_back,
            test_operators_rebake_fewer_lobes_and_revert, test_save_reopen_then_revert,
            test_bake_all_bakes_what_the_scene_renders, test_linked_inputs_are_carried_and_restored,
            test_a_user_graph_downstream_gets_no_eevee_output, test_pack_option, test_animated_inputs_keep_animating,
-           test_edits_on_the_group_node_survive_rebake_and_revert, test_two_materials_sharing_an_action_bake_and_revert])
+           test_edits_on_the_group_node_survive_rebake_and_revert, test_two_materials_sharing_an_action_bake_and_revert,
+           test_nla_strips_and_driver_variables_follow_the_inputs])
