@@ -61,7 +61,7 @@ def _key(path):
 
 
 def is_bake_file(name):
-    return name == "report.json" or re.fullmatch(
+    return name in ("report.json", "ndfbake.glsl") or re.fullmatch(
         r"level\d+_(lobe|color)\d+\.exr|atlas_lobe\d+\.exr", name) is not None
 
 

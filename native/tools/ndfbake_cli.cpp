@@ -15,7 +15,7 @@ namespace {
 const char* const kUsage = R"(ndfbake — normal-map NDF filtering (Han et al. 2007)
 
 usage:
-  ndfbake bake INPUT --out DIR [options]   fit vMF lobes per MIP texel, write lobe EXRs + report.json
+  ndfbake bake INPUT --out DIR [options]   fit lobes per MIP texel; write lobe EXRs, report.json, ndfbake.glsl
   ndfbake synth PATTERN --size N [--height H] [--seed S] --out FILE
                                            write a synthetic tileable normal map
                                            (vgroove, bumps, fbm, brushed, scratches, weave)
@@ -231,7 +231,7 @@ int run_bake(ndfb_context ctx, const Args& args)
             std::fputs("\r              \r", stderr);
         return fail_status(ctx, status);
     }
-    std::printf("wrote %s/report.json and the lobe textures\n", out_dir.c_str());
+    std::printf("wrote %s/report.json, the lobe textures and ndfbake.glsl\n", out_dir.c_str());
     return 0;
 }
 

@@ -13,6 +13,7 @@
 #include "bake/lobe_atlas.h"
 #include "bake/memory_budget.h"
 #include "error.h"
+#include "export/lobe_shader.h"
 #include "io/atomic_file.h"
 #include "io/color_decode.h"
 #include "io/image_read.h"
@@ -288,7 +289,7 @@ std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded,
 bool is_bake_file(const std::string& name)
 {
     static const std::regex pattern(R"(level\d+_(lobe|color)\d+\.exr|atlas_lobe\d+\.exr)");
-    return std::regex_match(name, pattern);
+    return name == kLobeShaderFileName || std::regex_match(name, pattern);
 }
 
 fs::path make_staging_dir(const fs::path& out_dir)
@@ -392,6 +393,8 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
                 }
             }
         }
+        names.push_back(kLobeShaderFileName);
+        write_text_atomic((staging / names.back()).string(), lobe_shader_glsl(pyramid.slots));
         timings.write = seconds_since(start);
         write_text_atomic((staging / "report.json").string(),
                           report_json(pyramid, decoded, settings, write, stats, timings, names));
