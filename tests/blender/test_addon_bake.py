@@ -342,6 +342,13 @@ def test_failure_while_building_nodes_rolls_back():
         h.cleanup(directory)
 
 
+def _keyframe_ramp(socket):
+    """Keys the socket's value 0 at frame 1 and 10 at frame 11 (about 5 at frame 6)."""
+    for frame, value in ((1, 0.0), (11, 10.0)):
+        socket.default_value = value
+        socket.keyframe_insert("default_value", frame=frame)
+
+
 def test_animated_inputs_keep_animating():
     from ndfbake import bake
     directory = h.temp_dir()
@@ -350,9 +357,7 @@ def test_animated_inputs_keep_animating():
         tree = material.node_tree
         principled = tree.nodes["Principled BSDF"]
         strength = principled.inputs["Emission Strength"]
-        for frame, value in ((1, 0.0), (11, 10.0)):
-            strength.default_value = value
-            strength.keyframe_insert("default_value", frame=frame)
+        _keyframe_ramp(strength)
         curve = tree.animation_data.action.fcurves[0]
         curve.modifiers.new("CYCLES")  # repeats the 1..11 ramp
         driver = principled.inputs["Metallic"].driver_add("default_value").driver
@@ -411,9 +416,7 @@ def test_two_materials_sharing_an_action_bake_and_revert():
     try:
         first = h.baked_scene(directory)
         strength = first.node_tree.nodes["Principled BSDF"].inputs["Emission Strength"]
-        for frame, value in ((1, 0.0), (11, 10.0)):
-            strength.default_value = value
-            strength.keyframe_insert("default_value", frame=frame)
+        _keyframe_ramp(strength)
         second = first.copy()
         h.plane_with(second, "Second")
         bpy.ops.wm.save_mainfile()
@@ -441,9 +444,7 @@ def test_nla_strips_and_driver_variables_follow_the_inputs():
         tree = first.node_tree
         principled = tree.nodes["Principled BSDF"]
         strength = principled.inputs["Emission Strength"]
-        for frame, value in ((1, 0.0), (11, 10.0)):
-            strength.default_value = value
-            strength.keyframe_insert("default_value", frame=frame)
+        _keyframe_ramp(strength)
         animation = tree.animation_data
         action = animation.action
         animation.nla_tracks.new().strips.new("ramp", 1, action)
