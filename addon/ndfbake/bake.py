@@ -8,7 +8,7 @@ A bake has three steps, so that the UI can run the slow one on a worker thread:
 
 `bake_material()` runs the three in a row (scripts, `blender -b`). `revert()` undoes a bake:
 the Principled BSDF's links come back, the group node, node groups and lobe images go; the lobe
-files go when the file is closed if no save used them (lobe_folders.py).
+files stay for Ctrl-Z (when they go: lobe_folders.py).
 
 Files (choices the design leaves open):
 - The lobe textures go into a new folder beside the .blend named after the material,
@@ -508,9 +508,8 @@ def _remove_images(names):
 
 
 def revert(material):
-    """Restores the material as it was before the bake. Its lobe folder stays for Ctrl-Z, and is
-    deleted when the file is closed if no save used it (lobe_folders.py). Returns (the folder,
-    [names of the other materials that use it])."""
+    """Restores the material as it was before the bake. Its lobe folder stays for Ctrl-Z (when it
+    goes: lobe_folders.py). Returns (the folder, [names of the other materials that use it])."""
     rec = material_scan.record(material) if material is not None else None
     if rec is None:
         raise BakeError("NOT_BAKED", "material '%s' has no ndfbake bake to revert" % (
@@ -522,5 +521,4 @@ def revert(material):
     _remove_nodes(material, rec)
     _remove_images(rec.get("images", []))
     del material[RECORD_KEY]
-    lobe_folders.note_in_use()
     return folder, [m.name for m in lobe_folders.folder_users(folder)] if folder else []

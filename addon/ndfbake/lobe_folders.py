@@ -13,14 +13,17 @@ side with a material of the same name.
 Deleting. A lobe folder may be needed by any .blend that was ever saved while using it: this one
 (and its .blend1 backups) before a re-bake or a Revert, the file before a Save As, a Save Copy, a
 library another file appends or links the material from, a copy made outside Blender. So a
-folder is deleted only if no .blend can know it: this session's bake wrote it, and no save of this
-session (any file, copies included) happened while a material or an image used it. That happens
-when the file is closed (another file opened, File > Revert, quit) or, for scripts,
-delete_unused_folders(). Quitting Blender with a window keeps the folders the file uses at that
-moment too: Blender saves that state as quit.blend for File > Recover > Last Session. A folder a saved file once used stays after a Revert or a re-bake; the
-Revert report names it, and the panel's "Delete Unused Lobe Folders" (unused_folders) lists the
-folders beside the .blend that this file does not use, for the user to delete once no other
-.blend needs them. Only the files a bake writes are deleted, then the folder if it is empty.
+folder is deleted automatically only if no .blend can know it: this session's bake wrote it, no
+save of this session (any file, copies included) happened while a material or an image used it,
+and Blender wrote no recovery file. Blender with a window writes recovery files that outlive the
+session and may point at any folder the file used: autosaves every few minutes and quit.blend
+(File > Recover > Last Session) as it quits, after freeing the file's data, with no handler for
+either. So only a background Blender (scripts, render farms) deletes this session's unsaved
+folders, when the file is closed (another file opened, quit) or through delete_unused_folders().
+Otherwise a folder stays after a Revert or a re-bake; the Revert report names it, and the panel's
+"Delete Unused Lobe Folders" (unused_folders) lists the folders beside the .blend that this file
+does not use, for the user to delete once no other .blend needs them. Only the files a bake
+writes are deleted, then the folder if it is empty.
 """
 import atexit
 import hashlib
@@ -120,26 +123,16 @@ def release(absolute):
     _reserved.discard(_key(absolute))
 
 
-# ---- the session's folders, deleted when the file is closed if no save ever used them ----------
+# ---- the session's folders: a background Blender deletes those no save used at close ------------
 
 _created = {}      # key: absolute path of each folder this session's bakes wrote
 _saved = set()     # keys of the folders something used while this session saved a .blend
-# Keys of this session's folders the file used when last looked (note_in_use): at quit, Blender
-# has freed the file's data before Python's exit handlers run.
-_in_use = set()
 
 
 def created(folder):
-    """A folder this session's bake wrote: deleted when the file is closed unless a save used it."""
+    """A folder this session's bake wrote: in a background Blender, deleted when the file is closed
+    unless a save used it."""
     _created[_key(folder)] = os.path.normpath(folder)
-    _in_use.add(_key(folder))
-
-
-def note_in_use():
-    """Looks again at which of this session's folders the file uses (after a Revert, an undo or a
-    redo; a bake adds its own in created()). A folder the file stops using in another way (a
-    material deleted) stays in the set and is kept at quit: the safe side."""
-    _in_use.intersection_update(_referenced())
 
 
 def _referenced():
@@ -170,11 +163,10 @@ def note_save():
     _saved.update(referenced & set(_created))
 
 
-def delete_unused_folders(keep=()):
-    """Deletes the folders this session's bakes wrote that no save used, except those whose keys
-    are in `keep`. Returns (files removed, [not removed])."""
-    keep = set(_saved) | set(keep)
-    doomed = [folder for key, folder in sorted(_created.items()) if key not in keep]
+def delete_unused_folders():
+    """Deletes the folders this session's bakes wrote that no save used. Returns (files removed,
+    [not removed])."""
+    doomed = [folder for key, folder in sorted(_created.items()) if key not in _saved]
     removed, left = delete_folders(doomed)
     for folder in doomed:
         if not os.path.isdir(folder):
@@ -214,15 +206,15 @@ def unused_folders():
 
 
 def deleted_at_close(folder):
-    """Whether closing the file will delete `folder` (this session wrote it, no save used it)."""
-    return _key(folder) in _created and _key(folder) not in _saved
+    """Whether closing the file will delete `folder` (a background Blender; this session wrote it,
+    no save used it)."""
+    return bpy.app.background and _key(folder) in _created and _key(folder) not in _saved
 
 
 def forget_session():
     """Nothing of this session is deleted any more (the add-on is being turned off)."""
     _created.clear()
     _saved.clear()
-    _in_use.clear()
 
 
 def delete_bake_files(folder, names):
@@ -247,9 +239,10 @@ def delete_bake_files(folder, names):
     return removed, left
 
 
-def _close_session(keep=()):
+def _close_session():
+    """With a window, recovery files may need any folder (module docstring): nothing is deleted."""
     try:
-        removed, left = delete_unused_folders(keep)
+        removed, left = delete_unused_folders() if bpy.app.background else (0, [])
         if left:
             print("ndfbake: could not delete %s" % ", ".join(left))
     except Exception as e:  # a handler must not raise into Blender's file loading or exit
@@ -267,19 +260,11 @@ def _on_load_pre(*_):
     _close_session()
 
 
-@persistent
-def _on_undo_redo_post(*_):
-    note_in_use()
-
-
 def _on_exit():
-    # With a window, Blender has just written the file as it is to quit.blend (File > Recover >
-    # Last Session), which needs the folders it uses; a background process writes none.
-    _close_session(keep=set() if bpy.app.background else set(_in_use))
+    _close_session()
 
 
-_HANDLERS = (("save_post", _on_save_post), ("load_pre", _on_load_pre), ("undo_post", _on_undo_redo_post),
-             ("redo_post", _on_undo_redo_post))
+_HANDLERS = (("save_post", _on_save_post), ("load_pre", _on_load_pre))
 
 
 def _remove_our_handlers():

@@ -8,8 +8,8 @@
 - ndfbake.bake_all: every material the scene needs (bake.materials_needing_bake); from a script,
   one after another on the calling thread; from the UI, modal like ndfbake.bake, every native bake
   into a pending folder and all finished together, so that Esc leaves every material as it was.
-- ndfbake.revert: undoes the bake of the active material (or `material=`); the lobe textures are
-  deleted when the file is closed if no save used them (lobe_folders.py).
+- ndfbake.revert: undoes the bake of the active material (or `material=`); the lobe textures stay
+  for Ctrl-Z (when they go: lobe_folders.py).
 - ndfbake.delete_unused_folders: deletes, after a confirmation dialog listing them, the lobe
   textures of the folders beside the .blend that the file does not use.
 Failures are reported as one ERROR line each; from Python, bpy.ops raises RuntimeError then.
@@ -255,8 +255,9 @@ class NDFBAKE_OT_revert(bpy.types.Operator):
             self.report({"INFO"}, "ndfbake: %s reverted; its lobe textures (%s) are deleted when the file is "
                                   "closed" % (material.name, folder))
         else:
-            self.report({"INFO"}, "ndfbake: %s reverted; its lobe textures stay in %s, which a saved .blend "
-                                  "used: delete the folder when no .blend needs it" % (material.name, folder or "?"))
+            self.report({"INFO"}, "ndfbake: %s reverted; its lobe textures stay in %s for Ctrl-Z and for the .blend "
+                                  "files that may use them (saved, autosaved, quit.blend): Delete Unused Lobe Folders "
+                                  "in the ndfbake panel removes them" % (material.name, folder or "?"))
         return {"FINISHED"}
 
 
