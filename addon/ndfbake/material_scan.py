@@ -19,7 +19,9 @@ Choices the design leaves open, made here:
   user sees.
 - A muted Normal Map or Image Texture node is no normal map: the material renders without it.
 - A material linked from a library is refused (LINKED_MATERIAL): the bake changes the material
-  and writes beside the .blend, and neither would outlive a reload; bake it in its own file.
+  and writes beside the .blend, and neither would outlive a reload; bake it in its own file. So is
+  one whose Principled BSDF is animated by a linked action (LINKED_ANIMATION): the group node's
+  keyframes would go into that action, which is not saved with this file.
 - The Image datablock's colour space must be data (Non-Color, Raw or Linear). An sRGB-tagged
   normal map is refused (COLOR_SPACE), not baked raw: Blender renders such a material with the
   sRGB curve removed, so neither reading of the file would match both what the user sees now and
@@ -33,6 +35,8 @@ import os
 from dataclasses import dataclass, field
 
 import bpy
+
+from . import node_animation
 
 RECORD_KEY = "ndfbake_bake"
 # Colour spaces whose transform is the identity on the stored values (is_data covers the first two).
@@ -217,6 +221,12 @@ def scan(material):
                 "NO_IMAGE_TEXTURE", "Normal Map node '%s' does not take its Color from an Image Texture node" % nm.name))
             return result
         problem = check_image(tex.image, tex.name)
+        linked = node_animation.linked_curves(tree, p.name)
+        if linked:
+            problem = Problem("LINKED_ANIMATION", "Principled BSDF '%s' is animated by action %s, linked from a "
+                                                  "library: the bake's keyframes could not be saved in it; make the "
+                                                  "action local (Outliner: right-click > Make Local) and bake again"
+                              % (p.name, ", ".join("'%s'" % n for n in linked)))
         if problem:
             result.problems.append(problem)
             return result

@@ -3,24 +3,46 @@ BSDF's inputs on the ndfbake group node and when Revert puts them back.
 
 A material's node tree is animated by its active action, by the actions of its NLA strips, and by
 its drivers; a driver's variables may read other node inputs of the same material. All of them
-follow: curves are copied within each action, drivers are copied, and driver variables that read a
-moved input read it where it now lives. An action other materials share (Material.copy() shares
-them) keeps a node's curves while another of its materials has a node of that name: they are
-that node's curves too.
-"""
-import re
+follow: curves are copied within each action, drivers are copied, and driver variables of the
+tree's and the material's drivers that read a moved input read it where it now lives (paths by
+socket index or by socket name; drivers on other IDs are not visited). An action other node trees
+share (Material.copy() shares them) is theirs too: where another tree has a node of the target's
+name, a curve already at the target path is kept, and the source's curves stay.
 
+An action linked from a library cannot keep new curves (they are not saved); material_scan refuses
+such a material (LINKED_ANIMATION) before anything is changed.
+"""
 import bpy
 
 TEMPORARY_ACTION = "ndfbake temporary"
 
 
-def input_path(node, index):
-    return 'nodes["%s"].inputs[%d].default_value' % (bpy.utils.escape_identifier(node.name), index)
-
-
 def node_prefix(node_name):
     return 'nodes["%s"]' % bpy.utils.escape_identifier(node_name)
+
+
+def _socket_paths(node, index):
+    """The data paths that name input `index` of `node`: by index (as Blender writes them), by
+    socket name in double quotes and, where no escaping is needed, in single quotes."""
+    name = node.inputs[index].name
+    nodes = [node_prefix(node.name)]
+    sockets = ["inputs[%d]" % index, 'inputs["%s"]' % bpy.utils.escape_identifier(name)]
+    if "'" not in node.name and "\\" not in node.name:
+        nodes.append("nodes['%s']" % node.name)
+    if "'" not in name and "\\" not in name:
+        sockets.append("inputs['%s']" % name)
+    return [(n, s) for n in nodes for s in sockets]
+
+
+def input_paths(source, target, index_pairs):
+    """{data path of a source input: the same form of path for its target input} for each
+    (source index, target index), every form _socket_paths knows; the first entry of each input
+    is the index form."""
+    paths = {}
+    for i, j in index_pairs:
+        for (n, s), (tn, ts) in zip(_socket_paths(source, i), _socket_paths(target, j)):
+            paths["%s.%s.default_value" % (n, s)] = "%s.%s.default_value" % (tn, ts)
+    return paths
 
 
 def tree_actions(material_tree):
@@ -42,98 +64,143 @@ def tree_actions(material_tree):
 
 
 def animates_elsewhere(action, material_tree, node_name):
-    """Whether the action animates a node of that name in another ID than the tree's material (an
-    ID that is no material counts as one that does)."""
+    """Whether another node tree that the action animates has a node of that name."""
     for user in bpy.data.user_map(subset=[action]).get(action, ()):
-        if not isinstance(user, bpy.types.Material):
-            return True
-        if user.node_tree is not None and user.node_tree != material_tree and node_name in user.node_tree.nodes:
+        tree = user if isinstance(user, bpy.types.NodeTree) else getattr(user, "node_tree", None)
+        if isinstance(tree, bpy.types.NodeTree) and tree != material_tree and node_name in tree.nodes:
             return True
     return False
 
 
+def _copy_properties(source, target, skip=()):
+    """Every writable plain property of `source` onto `target`. Twice, since some take values only
+    after others (a Generator's coefficients after its order)."""
+    for _ in range(2):
+        for prop in source.bl_rna.properties:
+            if prop.is_readonly or prop.identifier in skip or prop.type in ("POINTER", "COLLECTION"):
+                continue
+            try:
+                setattr(target, prop.identifier, getattr(source, prop.identifier))
+            except (AttributeError, TypeError, ValueError):
+                pass
+
+
 def copy_fcurve(action, source, data_path):
-    """A copy of `source` at `data_path` in `action`, replacing any curve there: its keys, their
-    handles and easing, its extrapolation and its modifiers (every writable setting)."""
+    """A copy of `source` at `data_path` in `action`, replacing any curve there: its settings
+    (extrapolation, mute, lock, hide, colour…), its keys with their handles, easing and types, and
+    its modifiers with their settings and envelope points."""
     existing = action.fcurves.find(data_path, index=source.array_index)
     if existing is not None:
         action.fcurves.remove(existing)
     copy = action.fcurves.new(data_path, index=source.array_index,
                               action_group=source.group.name if source.group else "")
-    copy.extrapolation = source.extrapolation
+    _copy_properties(source, copy, skip=("data_path", "array_index", "select"))
     copy.keyframe_points.add(len(source.keyframe_points))
     for key, original in zip(copy.keyframe_points, source.keyframe_points):
-        for attribute in ("co", "handle_left", "handle_right", "handle_left_type", "handle_right_type",
-                          "interpolation", "easing", "amplitude", "back", "period"):
-            setattr(key, attribute, getattr(original, attribute))
+        _copy_properties(original, key, skip=("select_control_point", "select_left_handle", "select_right_handle"))
     for modifier in source.modifiers:
         new = copy.modifiers.new(modifier.type)
-        for prop in modifier.bl_rna.properties:
-            if not prop.is_readonly and prop.identifier not in ("type", "active"):
-                try:
-                    setattr(new, prop.identifier, getattr(modifier, prop.identifier))
-                except (AttributeError, TypeError, ValueError):
-                    pass  # a collection (envelope points): left at its default
+        _copy_properties(modifier, new, skip=("type", "active"))
+        for point in getattr(modifier, "control_points", ()):  # an Envelope's
+            added = new.control_points.add(point.frame)
+            added.min, added.max = point.min, point.max
     copy.update()
 
 
-def _retarget(data_path, paths):
-    """`data_path` with a key of `paths` (or that key and an array index after it) replaced by its
-    value; None where it reads none of them."""
-    match = re.fullmatch(r"(.*?\.default_value)(\[\d+\])?", data_path)
-    if match is None or match.group(1) not in paths:
-        return None
-    return paths[match.group(1)] + (match.group(2) or "")
-
-
-def _retarget_variables(material_tree, paths, skip_prefix):
-    """Driver variables of the tree's drivers (but those on inputs under `skip_prefix`) that read
-    an input of `paths`, through the tree or through its material, read the new path instead."""
+def _driver_sets(material_tree):
+    """The drivers of the tree and of its material (the ID that owns it)."""
     material = next((m for m in bpy.data.materials if m.node_tree == material_tree), None)
-    for fcurve in material_tree.animation_data.drivers:
-        if fcurve.data_path.startswith(skip_prefix):
-            continue
-        for variable in fcurve.driver.variables:
-            for target in variable.targets:
-                through_material = target.id_type == "MATERIAL" and material is not None and target.id == material
-                if through_material and target.data_path.startswith("node_tree."):
-                    new = _retarget(target.data_path[len("node_tree."):], paths)
-                    if new is not None:
-                        target.data_path = "node_tree." + new
-                elif target.id_type == "NODETREE" and target.id == material_tree:
-                    new = _retarget(target.data_path, paths)
-                    if new is not None:
-                        target.data_path = new
+    sets = [(material_tree.animation_data, "")]
+    if material is not None and material.animation_data is not None:
+        sets.append((material.animation_data, "node_tree."))
+    return [(animation, prefix) for animation, prefix in sets if animation is not None], material
 
 
-def copy_input_animation(material_tree, paths, source_node, move):
-    """Copies the keyframes (in every action of the tree) and drivers at each source data path of
-    `paths` to its target path, and makes driver variables that read a source read its target
-    (except the drivers of the source node's inputs, which stay as they are). With `move`, the
-    sources' drivers go, and their keyframes but where the action animates the source node
-    elsewhere."""
+def _retarget(data_path, paths):
+    """`data_path` with its input path (a key of `paths`, maybe followed by an array index)
+    replaced; None where it reads no input of `paths`."""
+    head, bracket, index = data_path.rpartition("[")
+    if bracket and index.endswith("]") and index[:-1].isdigit() and head in paths:
+        return paths[head] + "[" + index
+    return paths.get(data_path)
+
+
+def retarget_variables(material_tree, paths, source_node):
+    """Driver variables of the tree's and the material's drivers (but the drivers on the source
+    node's inputs) that read an input of `paths`, through the tree or through the material, read
+    the new path instead."""
+    sets, material = _driver_sets(material_tree)
+    for animation, prefix in sets:
+        skip = prefix + node_prefix(source_node)
+        for fcurve in animation.drivers:
+            if fcurve.data_path.startswith(skip):
+                continue
+            for variable in fcurve.driver.variables:
+                for target in variable.targets:
+                    if target.id_type == "MATERIAL" and material is not None and target.id == material \
+                            and target.data_path.startswith("node_tree."):
+                        new = _retarget(target.data_path[len("node_tree."):], paths)
+                        if new is not None:
+                            target.data_path = "node_tree." + new
+                    elif target.id_type == "NODETREE" and target.id == material_tree:
+                        new = _retarget(target.data_path, paths)
+                        if new is not None:
+                            target.data_path = new
+
+
+def copy_input_animation(material_tree, source, target, index_pairs, move):
+    """Gives input j of `target` the keyframes (in every action of the tree) and drivers of input
+    i of `source`, for each (i, j), and makes driver variables that read a source input read its
+    target (not the drivers of `source`'s own inputs, which stay as they are). With `move` (the
+    target's inputs then stand for what the user left on the source), the source's curves and
+    drivers go, and a target curve or driver the source no longer has goes too (the user deleted
+    it). In an action that animates a node of the target's name in another tree, curves already
+    at a target path and the source's curves stay (module docstring)."""
+    paths = input_paths(source, target, index_pairs)
     animation = material_tree.animation_data
-    if animation is None:
-        return
-    for action in tree_actions(material_tree):
-        keep_sources = not move or animates_elsewhere(action, material_tree, source_node)
-        for source in [f for f in action.fcurves if f.data_path in paths]:
-            copy_fcurve(action, source, paths[source.data_path])
-            if not keep_sources:
-                action.fcurves.remove(source)
-    for source in [f for f in animation.drivers if f.data_path in paths]:
-        existing = animation.drivers.find(paths[source.data_path], index=source.array_index)
+    if animation is not None:
+        for action in tree_actions(material_tree):
+            if action.library is not None:
+                continue  # refused before the bake (LINKED_ANIMATION); never written
+            _move_curves(action, paths, move, keep_targets=animates_elsewhere(action, material_tree, target.name))
+        _move_drivers(animation, paths, move)
+    retarget_variables(material_tree, paths, source.name)
+
+
+def _move_curves(action, paths, move, keep_targets):
+    sources = {(f.data_path, f.array_index): f for f in action.fcurves if f.data_path in paths}
+    if move and not keep_targets:
+        targets = {path: source for source, path in paths.items()}
+        for fcurve in [f for f in action.fcurves if f.data_path in targets]:
+            if (targets[fcurve.data_path], fcurve.array_index) not in sources:
+                action.fcurves.remove(fcurve)
+    for (data_path, index), fcurve in sources.items():
+        if not (keep_targets and action.fcurves.find(paths[data_path], index=index) is not None):
+            copy_fcurve(action, fcurve, paths[data_path])
+        if move and not keep_targets:
+            action.fcurves.remove(fcurve)
+
+
+def _move_drivers(animation, paths, move):
+    sources = {(f.data_path, f.array_index): f for f in animation.drivers if f.data_path in paths}
+    if move:
+        targets = {path: source for source, path in paths.items()}
+        for fcurve in [f for f in animation.drivers if f.data_path in targets]:
+            if (targets[fcurve.data_path], fcurve.array_index) not in sources:
+                animation.drivers.remove(fcurve)
+    for (data_path, index), fcurve in sources.items():
+        existing = animation.drivers.find(paths[data_path], index=index)
         if existing is not None:
             animation.drivers.remove(existing)
-        animation.drivers.from_existing(src_driver=source).data_path = paths[source.data_path]
+        animation.drivers.from_existing(src_driver=fcurve).data_path = paths[data_path]
         if move:
-            animation.drivers.remove(source)
-    _retarget_variables(material_tree, paths, node_prefix(source_node))
+            animation.drivers.remove(fcurve)
 
 
 def remove_node_animation(material_tree, node_name):
     """Drops the drivers and keyframes of the named node's inputs (but the keyframes of an action
-    that animates that node elsewhere); and the tree's animation data when nothing is left in it."""
+    that animates a node of that name in another tree); and the tree's animation data when nothing
+    is left in it."""
     animation = material_tree.animation_data
     if animation is None:
         return
@@ -141,7 +208,7 @@ def remove_node_animation(material_tree, node_name):
     for fcurve in [f for f in animation.drivers if f.data_path.startswith(prefix)]:
         animation.drivers.remove(fcurve)
     for action in tree_actions(material_tree):
-        if not animates_elsewhere(action, material_tree, node_name):
+        if action.library is None and not animates_elsewhere(action, material_tree, node_name):
             for fcurve in [f for f in action.fcurves if f.data_path.startswith(prefix)]:
                 action.fcurves.remove(fcurve)
     if not animation.drivers and animation.action is None and not animation.nla_tracks:
@@ -150,7 +217,7 @@ def remove_node_animation(material_tree, node_name):
 
 def remove_node(material_tree, node):
     """Removes `node`. Blender drops a removed node's curves from every action of the tree, also
-    from an action that animates a node of that name in another material: there they are put back."""
+    from an action that animates a node of that name in another tree: there they are put back."""
     prefix = node_prefix(node.name)
     kept = []
     try:
@@ -167,3 +234,10 @@ def remove_node(material_tree, node):
             for fcurve in holder.fcurves:
                 copy_fcurve(action, fcurve, fcurve.data_path)
             bpy.data.actions.remove(holder)
+
+
+def linked_curves(material_tree, node_name):
+    """The names of linked (library) actions of the tree that animate the named node's inputs."""
+    prefix = node_prefix(node_name)
+    return [action.name for action in tree_actions(material_tree)
+            if action.library is not None and any(f.data_path.startswith(prefix) for f in action.fcurves)]

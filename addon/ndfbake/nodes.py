@@ -657,9 +657,8 @@ def carry_animation(material_tree, principled, node):
     """Copies the keyframes and drivers of the Principled's unlinked inputs to the group node's
     inputs of the same name, which hold those values after the bake: an animated colour or emission
     goes on animating, and drivers that read those inputs read the node's."""
-    paths = {node_animation.input_path(principled, i): node_animation.input_path(node, j)
-             for i, j in _shared_inputs(principled, node).items() if not principled.inputs[i].is_linked}
-    node_animation.copy_input_animation(material_tree, paths, principled.name, move=False)
+    pairs = [(i, j) for i, j in _shared_inputs(principled, node).items() if not principled.inputs[i].is_linked]
+    node_animation.copy_input_animation(material_tree, principled, node, pairs, move=False)
 
 
 def _copy_input(links, source, target):
@@ -681,12 +680,12 @@ def write_back_inputs(material_tree, node, principled):
     """The group node's inputs as the user left them (values, links, keyframes, drivers) go back to
     the Principled BSDF before the node goes, so that Revert keeps the user's edits on the node and
     a re-bake starts from them. Unedited, the Principled is left exactly as it was."""
-    paths = {}
+    pairs = []
     for i, j in _shared_inputs(principled, node).items():
         _copy_input(material_tree.links, node.inputs[j], principled.inputs[i])
         if not node.inputs[j].is_linked:
-            paths[node_animation.input_path(node, j)] = node_animation.input_path(principled, i)
-    node_animation.copy_input_animation(material_tree, paths, node.name, move=True)
+            pairs.append((j, i))
+    node_animation.copy_input_animation(material_tree, node, principled, pairs, move=True)
 
 
 def insert_group_node(material_tree, group_tree, principled, normal_map, image_texture):
@@ -777,8 +776,9 @@ def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee
     group node leaves the Principled BSDF again, wherever the user has led it since the bake (a
     Mix Shader put after the group stays); where the group node is gone, the links it bypassed
     come back. With keep_edits, the node's inputs go back to the Principled (write_back_inputs;
-    not when undoing a half-built insert). Then the group node goes. Returns the group tree it
-    used (or None)."""
+    not when undoing a half-built insert, where only driver variables that insert pointed at the
+    node read the Principled again). Then the group node goes. Returns the group tree it used (or
+    None)."""
     nodes = material_tree.nodes
     added = nodes.get(eevee_output) if eevee_output else None
     if added is not None and added.get(TAG) is not None:
@@ -786,8 +786,12 @@ def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee
     node = nodes.get(node_name)
     principled = nodes.get(principled_name)
     group_tree = node.node_tree if node is not None else None
-    if keep_edits and node is not None and principled is not None:
-        write_back_inputs(material_tree, node, principled)
+    if node is not None and principled is not None:
+        if keep_edits:
+            write_back_inputs(material_tree, node, principled)
+        else:
+            node_animation.retarget_variables(material_tree, node_animation.input_paths(
+                node, principled, [(j, i) for i, j in _shared_inputs(principled, node).items()]), node.name)
     node_animation.remove_node_animation(material_tree, node_name)
     if node is not None:
         leaving = [link for output in node.outputs if output.type == "SHADER" for link in output.links]

@@ -489,6 +489,155 @@ def test_nla_strips_and_driver_variables_follow_the_inputs():
         h.cleanup(directory)
 
 
+def _curve_state(fcurve):
+    return (fcurve.data_path, fcurve.mute, fcurve.lock, fcurve.hide, fcurve.extrapolation,
+            [(tuple(k.co), k.type, k.interpolation) for k in fcurve.keyframe_points],
+            [(m.type, len(getattr(m, "control_points", ()))) for m in fcurve.modifiers])
+
+
+def test_curve_settings_and_deletions_on_the_node_survive():
+    """A muted, locked, hidden curve with a Breakdown key and an Envelope point is copied with all
+    of that (muted on the node too), and comes back the same on Revert; a driver the user removed
+    on the group node stays removed on the Principled."""
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        tree = material.node_tree
+        principled = tree.nodes["Principled BSDF"]
+        strength = principled.inputs["Emission Strength"]
+        _keyframe_ramp(strength)
+        curve = tree.animation_data.action.fcurves[0]
+        curve.mute = curve.lock = curve.hide = True
+        curve.keyframe_points[1].type = "BREAKDOWN"
+        curve.modifiers.new("ENVELOPE").control_points.add(5)
+        strength.default_value = 1.0
+        principled.inputs["Metallic"].driver_add("default_value").driver.expression = "0.25"
+        before = _curve_state(curve)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        node = tree.nodes["ndfbake"]
+        bpy.context.scene.frame_set(11)
+        h.expect(abs(node.inputs["Emission Strength"].default_value - 1.0) < 1e-6, "the muted curve animates the node")
+        node.inputs["Metallic"].driver_remove("default_value")
+        node.inputs["Metallic"].default_value = 0.3
+        bake.revert(material)
+        after = [_curve_state(f) for f in tree.animation_data.action.fcurves]
+        h.expect(after == [before], "the curve after Revert: %s, before the bake: %s" % (after, before))
+        h.expect(not tree.animation_data.drivers, "the driver removed on the node came back")
+        h.expect(abs(principled.inputs["Metallic"].default_value - 0.3) < 1e-6, "Metallic was not written back")
+    finally:
+        h.cleanup(directory)
+
+
+def test_a_copy_sharing_the_action_keeps_its_own_edits():
+    """Two materials share an action: keys the user sets on one are not overwritten by the other's
+    bake-time copies when the other is baked or reverted."""
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        first = h.baked_scene(directory)
+        _keyframe_ramp(first.node_tree.nodes["Principled BSDF"].inputs["Emission Strength"])
+        second = first.copy()
+        h.plane_with(second, "Second")
+        bpy.ops.wm.save_mainfile()
+        scene = bpy.context.scene
+
+        def key_fifty(socket):
+            socket.default_value = 50.0
+            socket.keyframe_insert("default_value", frame=11)
+        bake.bake_material(first, bake.BakeSettings(max_lobes=1))
+        key_fifty(second.node_tree.nodes["Principled BSDF"].inputs["Emission Strength"])
+        bake.revert(first)
+        scene.frame_set(1)
+        scene.frame_set(11)
+        value = second.node_tree.nodes["Principled BSDF"].inputs["Emission Strength"].default_value
+        h.expect(abs(value - 50.0) < 1e-4, "reverting the first material undid the copy's key (%g)" % value)
+        bake.bake_material(second, bake.BakeSettings(max_lobes=1))
+        key_fifty(second.node_tree.nodes["ndfbake"].inputs["Emission Strength"])
+        bake.bake_material(first, bake.BakeSettings(max_lobes=1))
+        scene.frame_set(1)
+        scene.frame_set(11)
+        value = second.node_tree.nodes["ndfbake"].inputs["Emission Strength"].default_value
+        h.expect(abs(value - 50.0) < 1e-4, "baking the first material undid the copy's key on its node (%g)" % value)
+    finally:
+        h.cleanup(directory)
+
+
+def test_driver_variables_by_socket_name_and_on_the_material_follow():
+    """A variable that names the socket and a driver on the material itself read the group node
+    while baked and the Principled after Revert; a bake that fails after the node got its inputs
+    leaves the variables as they were."""
+    from ndfbake import bake, nodes
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        tree = material.node_tree
+        tree.nodes["Principled BSDF"].inputs["Metallic"].default_value = 0.25
+        reader = tree.nodes.new("ShaderNodeValue")
+        variables = []
+        for driver in (reader.outputs[0].driver_add("default_value").driver, material.driver_add("roughness").driver):
+            driver.type = "SUM"
+            variable = driver.variables.new()
+            variable.targets[0].id_type = "MATERIAL"
+            variable.targets[0].id = material
+            variable.targets[0].data_path = 'node_tree.nodes["Principled BSDF"].inputs["Metallic"].default_value'
+            variables.append(variable)
+        paths = [v.targets[0].data_path for v in variables]
+        original = nodes.add_eevee_output
+
+        def broken(*args):
+            raise RuntimeError("simulated bug")
+        nodes.add_eevee_output = broken
+        try:
+            bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+            raise AssertionError("the simulated bug did not surface")
+        except bake.BakeError:
+            pass
+        finally:
+            nodes.add_eevee_output = original
+        h.expect([v.targets[0].data_path for v in variables] == paths, "the failed bake left %s"
+                 % [v.targets[0].data_path for v in variables])
+        bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        tree.nodes["ndfbake"].inputs["Metallic"].default_value = 0.75
+        bpy.context.scene.frame_set(2)
+        h.expect(abs(reader.outputs[0].default_value - 0.75) < 1e-6 and abs(material.roughness - 0.75) < 1e-6,
+                 "the drivers read %g and %g, not the node's 0.75" % (reader.outputs[0].default_value,
+                                                                    material.roughness))
+        bake.revert(material)
+        h.expect([v.targets[0].data_path for v in variables] == paths, "Revert left %s"
+                 % [v.targets[0].data_path for v in variables])
+    finally:
+        h.cleanup(directory)
+
+
+def test_a_linked_action_is_refused():
+    """An action linked from a library cannot keep the group node's curves: LINKED_ANIMATION, and
+    the material stays as it was."""
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        action = bpy.data.actions.new("Library Action")
+        action.id_root = "NODETREE"
+        curve = action.fcurves.new('nodes["Principled BSDF"].inputs[20].default_value')
+        curve.keyframe_points.insert(1, 0.0)
+        library = os.path.join(directory, "library.blend")
+        bpy.data.libraries.write(library, {action}, fake_user=True)
+        bpy.data.actions.remove(action)
+        with bpy.data.libraries.load(library, link=True) as (source, target):
+            target.actions = ["Library Action"]
+        material.node_tree.animation_data_create().action = bpy.data.actions["Library Action"]
+        before = h.dump_material(material)
+        try:
+            bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+            raise AssertionError("a material animated by a linked action was baked")
+        except bake.BakeError as e:
+            h.expect(e.code == "LINKED_ANIMATION" and "Library Action" in e.message, "%s: %s" % (e.code, e.message))
+        h.expect(h.dump_material(material) == before, "the refused bake changed the material")
+    finally:
+        h.cleanup(directory)
+
+
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_bake_adds_only_the_group_and_bypass, test_failure_while_building_nodes_rolls_back,
@@ -496,4 +645,6 @@ if __name__ == "__main__":
            test_bake_all_bakes_what_the_scene_renders, test_linked_inputs_are_carried_and_restored,
            test_a_user_graph_downstream_gets_no_eevee_output, test_pack_option, test_animated_inputs_keep_animating,
            test_edits_on_the_group_node_survive_rebake_and_revert, test_two_materials_sharing_an_action_bake_and_revert,
-           test_nla_strips_and_driver_variables_follow_the_inputs])
+           test_nla_strips_and_driver_variables_follow_the_inputs, test_curve_settings_and_deletions_on_the_node_survive,
+           test_a_copy_sharing_the_action_keeps_its_own_edits,
+           test_driver_variables_by_socket_name_and_on_the_material_follow, test_a_linked_action_is_refused])
