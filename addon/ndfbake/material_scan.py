@@ -163,6 +163,17 @@ def check_image(image, node_name):
     return None
 
 
+def _linked_animation(tree, principled):
+    """The LINKED_ANIMATION problem, where a linked action animates the Principled's inputs."""
+    linked = node_animation.linked_curves(tree, principled.name)
+    if not linked:
+        return None
+    return Problem("LINKED_ANIMATION", "Principled BSDF '%s' is animated by action %s, linked from a library: "
+                                      "the bake's keyframes could not be saved in it; make the action local "
+                                      "(Outliner: right-click > Make Local) and bake again"
+                   % (principled.name, ", ".join("'%s'" % n for n in linked)))
+
+
 def scan(material):
     """Everything bake.py needs to know about `material`, or the problems that stop it."""
     result = ScanResult(material=material.name if material else "")
@@ -220,13 +231,7 @@ def scan(material):
             result.problems.append(Problem(
                 "NO_IMAGE_TEXTURE", "Normal Map node '%s' does not take its Color from an Image Texture node" % nm.name))
             return result
-        problem = check_image(tex.image, tex.name)
-        linked = node_animation.linked_curves(tree, p.name)
-        if linked:
-            problem = Problem("LINKED_ANIMATION", "Principled BSDF '%s' is animated by action %s, linked from a "
-                                                  "library: the bake's keyframes could not be saved in it; make the "
-                                                  "action local (Outliner: right-click > Make Local) and bake again"
-                              % (p.name, ", ".join("'%s'" % n for n in linked)))
+        problem = check_image(tex.image, tex.name) or _linked_animation(tree, p)
         if problem:
             result.problems.append(problem)
             return result
