@@ -3,6 +3,7 @@
 set -euo pipefail
 packages=(build-essential cmake pkg-config libopenimageio-dev libopenexr-dev openimageio-tools
           libgtest-dev python3 blender assimp-testmodels xvfb
+          glslang-tools          # compiles the bakes' ndfbake.glsl in the tests
           libegl1 libegl-mesa0   # EEVEE in `blender -b` renders through surfaceless EGL (Mesa)
           clang libclang-rt-14-dev)  # clang + libFuzzer: the fuzz targets (scripts/fuzz.sh)
 missing=()

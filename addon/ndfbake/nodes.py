@@ -15,9 +15,11 @@ Per shading point and lobe ("NDFB vMF Lobe" group):
 
     α_j   = R                                   (mixture weight)
     r_j   = (G, B, A) / max(α_j, 1e-6)
-    R_j   = min(|r_j|, 0.9999)
+    R_j   = min(|r_j|, 1)                       (= 1: one direction, 1/κ = 0)
     μ_j   = normalize(r_j + 1e-5·ẑ)             (tangent space; +Z when R_j → 0)
-    1/κ_j = (1 − R²) / max(R(3 − R²), 1e-6)     (no division by zero as R → 0: a uniform lobe)
+    1/κ_j = max((1 − R²) / max(R(3 − R²), 1e-6) − 4e-4, 0)
+            (no division by zero as R → 0: a uniform lobe; 4e-4 = HALF_INV_KAPPA_RESOLUTION, how
+            far half-float storage may move 1/κ of a single direction off 0)
     a     = roughness²                          (Blender's GGX α)
     a'    = sqrt(min(a² + 1.5/κ_j, 1))          (brdf.h: kGgxVmfWidening = 1.5, α' ≤ 1)
     roughness'_j = sqrt(a')
@@ -50,7 +52,7 @@ import bpy
 
 from . import node_animation, scene_lod
 
-GROUP_VERSION = 1
+GROUP_VERSION = 2
 TAG = "ndfbake"                       # ID/custom property marking what this add-on created
 LOBE_GROUP = "NDFB vMF Lobe v%d" % GROUP_VERSION
 GRAZING_GROUP = "NDFB Grazing Roughness v%d" % GROUP_VERSION
@@ -61,6 +63,8 @@ LOD_INPUTS = ("Texels per Unit", "Pixel Angle", "Pixel Size")
 EEVEE_BSDF = "EEVEE BSDF"             # the group's second shader output (narrowed lobes)
 TAP_CORNERS = ("00", "10", "01", "11")  # x then y offset of a bilinear tap
 GGX_VMF_WIDENING = 1.5                # native/src/math/brdf.h kGgxVmfWidening
+HALF_INV_KAPPA_RESOLUTION = 4e-4      # native/src/io/lobe_exr.h kHalfInvKappaResolution (the add-on
+                                      # writes half floats)
 # cos θ is floored here (θ ≈ 89.9°) so that tan²θ stays finite where a lobe faces away.
 GRAZING_MIN_COSINE = 1e-3
 EEVEE_OUTPUT = "ndfbake EEVEE Output"   # the Material Output (target EEVEE) a bake may add
@@ -174,7 +178,7 @@ def lobe_group():
                        location=(-850, 250))
     r = _vmath(tree, "SCALE", comb.outputs[0], scale=inv_weight, location=(-700, 100))
     length = _vmath(tree, "LENGTH", r, location=(-550, 250), output=1)
-    big_r = _math(tree, "MINIMUM", length, 0.9999, location=(-400, 250))
+    big_r = _math(tree, "MINIMUM", length, 1.0, location=(-400, 250))
     mu = _vmath(tree, "NORMALIZE", _vmath(tree, "ADD", r, (0.0, 0.0, 1e-5), location=(-550, -100)),
                 location=(-400, -100))
     color = _vmath(tree, "MULTIPLY_ADD", mu, (0.5, 0.5, 0.5), (0.5, 0.5, 0.5), location=(-250, -100))
@@ -184,7 +188,10 @@ def lobe_group():
     denominator = _math(tree, "MAXIMUM", _math(tree, "MULTIPLY", big_r, _math(tree, "SUBTRACT", 3.0, r2,
                                                                                location=(-100, 200)),
                                                location=(50, 200)), 1e-6, location=(200, 200))
-    inv_kappa = _math(tree, "DIVIDE", numerator, denominator, location=(350, 300))
+    inv_kappa = _math(tree, "MAXIMUM", _math(tree, "SUBTRACT", _math(tree, "DIVIDE", numerator, denominator,
+                                                                      location=(350, 300)),
+                                             HALF_INV_KAPPA_RESOLUTION, location=(350, 450)), 0.0,
+                      location=(350, 600))
 
     rough = gin.outputs["Roughness"]
     alpha = _math(tree, "MULTIPLY", rough, rough, location=(-1000, -300))

@@ -8,8 +8,9 @@ the decode group's outputs read from levelLL_lobej.exr (Closest interpolation, w
 pixel under an orthographic camera): (widened roughness, 0, weight) on one row of planes and the
 tangent-space normal colour on the other. The renders (Cycles and EEVEE, Standard view transform,
 no pixel filter) must match a NumPy evaluation of the rule written from brdf.h, independently of
-nodes.py:  α'² = min(α² + 1.5/κ, 1), α = roughness², κ = (3R − R³)/(1 − R²). (brdf.h's amplitude
-is not part of the shading: see nodes.py.)
+nodes.py:  α'² = min(α² + 1.5/κ, 1), α = roughness², κ = (3R − R³)/(1 − R²), R ≤ 1, with 1/κ
+lowered by the half-float resolution 4e-4 (io/lobe_exr.h) and kept ≥ 0. (brdf.h's amplitude is not
+part of the shading: see nodes.py.)
 """
 import os
 import sys
@@ -24,17 +25,17 @@ SIZE = 32
 ROUGHNESS = 0.3
 
 
-def reference(rgba, roughness, widening=1.5):
+def reference(rgba, roughness, widening=1.5, resolution=4e-4):
     """weight, normal colour and widened roughness per texel, from brdf.h's rule."""
     alpha_j = rgba[..., 0].astype(np.float64)
     v = rgba[..., 1:4].astype(np.float64)
     r = v / np.maximum(alpha_j, 1e-6)[..., None]
-    big_r = np.minimum(np.linalg.norm(r, axis=-1), 0.9999)
+    big_r = np.minimum(np.linalg.norm(r, axis=-1), 1.0)
     mu = r + np.array([0, 0, 1e-5])
     mu /= np.linalg.norm(mu, axis=-1, keepdims=True)
     with np.errstate(divide="ignore"):
         kappa = (3 * big_r - big_r ** 3) / (1 - big_r ** 2)
-        inv_kappa = np.where(kappa > 0, 1.0 / kappa, 1e6)
+        inv_kappa = np.where(kappa > 0, np.maximum(1.0 / kappa - resolution, 0.0), 1e6)
     a = roughness ** 2
     widened = np.sqrt(np.minimum(a * a + widening * inv_kappa, 1.0))
     return alpha_j, mu * 0.5 + 0.5, np.sqrt(widened)

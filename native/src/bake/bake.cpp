@@ -46,7 +46,9 @@ void encode_lobe(const VmfLobe& lobe, float* rgba)
         rgba[0] = rgba[1] = rgba[2] = rgba[3] = 0.0f;
         return;
     }
-    const float r = float(resultant_from_kappa(lobe.kappa));
+    // κ at the cap stands for a single direction (level 0's fine normals; texels whose normals
+    // agree): EM stops at kKappaMax for its numerics, the texture stores the limit |r| = 1.
+    const float r = lobe.kappa >= kKappaMax ? 1.0f : float(resultant_from_kappa(lobe.kappa));
     rgba[0] = lobe.alpha;
     rgba[1] = lobe.alpha * r * lobe.mu.x;
     rgba[2] = lobe.alpha * r * lobe.mu.y;
@@ -394,7 +396,7 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
             }
         }
         names.push_back(kLobeShaderFileName);
-        write_text_atomic((staging / names.back()).string(), lobe_shader_glsl(pyramid.slots));
+        write_text_atomic((staging / names.back()).string(), lobe_shader_glsl(pyramid.slots, write.precision));
         timings.write = seconds_since(start);
         write_text_atomic((staging / "report.json").string(),
                           report_json(pyramid, decoded, settings, write, stats, timings, names));
