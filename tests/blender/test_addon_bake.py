@@ -313,25 +313,32 @@ def test_pack_option():
         h.cleanup(directory)
 
 
-def test_failure_while_building_nodes_rolls_back():
+def _bake_with_a_bug_in(material, function, **settings):
+    """Bakes with nodes.<function> raising, and returns the BakeError the bake must end with."""
     from ndfbake import bake, nodes
+    original = getattr(nodes, function)
+
+    def broken(*args):
+        raise RuntimeError("simulated bug")
+    setattr(nodes, function, broken)
+    try:
+        bake.bake_material(material, bake.BakeSettings(**settings))
+    except bake.BakeError as e:
+        return e
+    finally:
+        setattr(nodes, function, original)
+    raise AssertionError("the simulated bug in nodes.%s did not surface" % function)
+
+
+def test_failure_while_building_nodes_rolls_back():
+    from ndfbake import bake
     directory = h.temp_dir()
     try:
         material = h.baked_scene(directory)
         before, data_before, files_before = h.dump_material(material), h.data_counts(), h.listing(directory)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
-        original = nodes._wire_group_node
-
-        def broken(*args):
-            raise RuntimeError("simulated bug")
-        nodes._wire_group_node = broken
-        try:
-            bake.bake_material(material, bake.BakeSettings(max_lobes=3))
-            raise AssertionError("the simulated bug did not surface")
-        except bake.BakeError as e:
-            h.expect(e.code == "INTERNAL" and "simulated bug" in e.message, e.message)
-        finally:
-            nodes._wire_group_node = original
+        error = _bake_with_a_bug_in(material, "_wire_group_node", max_lobes=3)
+        h.expect(error.code == "INTERNAL" and "simulated bug" in error.message, error.message)
         h.expect(h.dump_material(material) == before, "a half-built material was left")
         h.expect(h.data_counts() == data_before, "data-blocks left: %s" % h.data_counts())
         bpy.ops.wm.save_mainfile()
@@ -342,22 +349,24 @@ def test_failure_while_building_nodes_rolls_back():
         h.cleanup(directory)
 
 
-def _keyframe_ramp(socket):
-    """Keys the socket's value 0 at frame 1 and 10 at frame 11 (about 5 at frame 6)."""
+def _ramped_scene(directory):
+    """baked_scene, with the Principled's Emission Strength keyed 0 at frame 1 and 10 at frame 11
+    (about 5 at frame 6). Returns the material and that input."""
+    material = h.baked_scene(directory)
+    strength = material.node_tree.nodes["Principled BSDF"].inputs["Emission Strength"]
     for frame, value in ((1, 0.0), (11, 10.0)):
-        socket.default_value = value
-        socket.keyframe_insert("default_value", frame=frame)
+        strength.default_value = value
+        strength.keyframe_insert("default_value", frame=frame)
+    return material, strength
 
 
 def test_animated_inputs_keep_animating():
     from ndfbake import bake
     directory = h.temp_dir()
     try:
-        material = h.baked_scene(directory)
+        material, strength = _ramped_scene(directory)
         tree = material.node_tree
         principled = tree.nodes["Principled BSDF"]
-        strength = principled.inputs["Emission Strength"]
-        _keyframe_ramp(strength)
         curve = tree.animation_data.action.fcurves[0]
         curve.modifiers.new("CYCLES")  # repeats the 1..11 ramp
         driver = principled.inputs["Metallic"].driver_add("default_value").driver
@@ -414,9 +423,7 @@ def test_two_materials_sharing_an_action_bake_and_revert():
     from ndfbake import bake
     directory = h.temp_dir()
     try:
-        first = h.baked_scene(directory)
-        strength = first.node_tree.nodes["Principled BSDF"].inputs["Emission Strength"]
-        _keyframe_ramp(strength)
+        first, _ = _ramped_scene(directory)
         second = first.copy()
         h.plane_with(second, "Second")
         bpy.ops.wm.save_mainfile()
@@ -440,11 +447,9 @@ def test_nla_strips_and_driver_variables_follow_the_inputs():
     from ndfbake import bake
     directory = h.temp_dir()
     try:
-        first = h.baked_scene(directory)
+        first, strength = _ramped_scene(directory)
         tree = first.node_tree
         principled = tree.nodes["Principled BSDF"]
-        strength = principled.inputs["Emission Strength"]
-        _keyframe_ramp(strength)
         animation = tree.animation_data
         action = animation.action
         animation.nla_tracks.new().strips.new("ramp", 1, action)
@@ -502,11 +507,9 @@ def test_curve_settings_and_deletions_on_the_node_survive():
     from ndfbake import bake
     directory = h.temp_dir()
     try:
-        material = h.baked_scene(directory)
+        material, strength = _ramped_scene(directory)
         tree = material.node_tree
         principled = tree.nodes["Principled BSDF"]
-        strength = principled.inputs["Emission Strength"]
-        _keyframe_ramp(strength)
         curve = tree.animation_data.action.fcurves[0]
         curve.mute = curve.lock = curve.hide = True
         curve.keyframe_points[1].type = "BREAKDOWN"
@@ -535,8 +538,7 @@ def test_a_copy_sharing_the_action_keeps_its_own_edits():
     from ndfbake import bake
     directory = h.temp_dir()
     try:
-        first = h.baked_scene(directory)
-        _keyframe_ramp(first.node_tree.nodes["Principled BSDF"].inputs["Emission Strength"])
+        first, _ = _ramped_scene(directory)
         second = first.copy()
         h.plane_with(second, "Second")
         bpy.ops.wm.save_mainfile()
@@ -567,7 +569,7 @@ def test_driver_variables_by_socket_name_and_on_the_material_follow():
     """A variable that names the socket and a driver on the material itself read the group node
     while baked and the Principled after Revert; a bake that fails after the node got its inputs
     leaves the variables as they were."""
-    from ndfbake import bake, nodes
+    from ndfbake import bake
     directory = h.temp_dir()
     try:
         material = h.baked_scene(directory)
@@ -583,18 +585,7 @@ def test_driver_variables_by_socket_name_and_on_the_material_follow():
             variable.targets[0].data_path = 'node_tree.nodes["Principled BSDF"].inputs["Metallic"].default_value'
             variables.append(variable)
         paths = [v.targets[0].data_path for v in variables]
-        original = nodes.add_eevee_output
-
-        def broken(*args):
-            raise RuntimeError("simulated bug")
-        nodes.add_eevee_output = broken
-        try:
-            bake.bake_material(material, bake.BakeSettings(max_lobes=1))
-            raise AssertionError("the simulated bug did not surface")
-        except bake.BakeError:
-            pass
-        finally:
-            nodes.add_eevee_output = original
+        _bake_with_a_bug_in(material, "add_eevee_output", max_lobes=1)
         h.expect([v.targets[0].data_path for v in variables] == paths, "the failed bake left %s"
                  % [v.targets[0].data_path for v in variables])
         bake.bake_material(material, bake.BakeSettings(max_lobes=1))
