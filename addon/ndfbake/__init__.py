@@ -24,12 +24,14 @@ bl_info = {
 
 if "bpy" in locals():
     import importlib
-    for _module in (native, material_scan, scene_lod, nodes, lobe_folders, bake, operators, ui):  # noqa: F821
+    for _module in (native, node_animation, material_scan, scene_lod, nodes, lobe_folders, bake, operators,  # noqa: F821
+                    ui):  # noqa: F821
         importlib.reload(_module)
 
 import bpy  # noqa: E402
 
-from . import bake, lobe_folders, material_scan, native, nodes, operators, scene_lod, ui  # noqa: E402,F401
+from . import (bake, lobe_folders, material_scan, native, node_animation, nodes, operators,  # noqa: E402,F401
+               scene_lod, ui)
 
 
 def register():
