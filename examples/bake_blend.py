@@ -13,8 +13,9 @@ re-bake, reverted) are deleted. --revert undoes earlier bakes instead (nodes res
 deleted as just said).
 
 Exit status: 0 when every material succeeded; 1 when any failed (a failed material and its files
-are left exactly as they were; the others are still baked and saved); 2 for bad usage (unknown
-option, a material that does not exist, an unsaved .blend).
+are left exactly as they were; the others are still baked and saved), when the .blend could not
+be saved, or on an unexpected error; 2 for bad usage (unknown option, a value out of range, a
+material that does not exist, an unsaved .blend).
 
 The add-on is the enabled or installed `ndfbake` if there is one, else this repository's addon/
 folder; the native library is the one inside the add-on folder, or $NDFBAKE_LIBRARY, or
@@ -44,15 +45,29 @@ def _import_addon():
     return ndfbake
 
 
+def _bounded(kind, low, high):
+    """An argparse type: `kind` within [low, high], else a usage error (status 2)."""
+    def parse(text):
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError("not a number: %r" % text) from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError("%s is not in %s..%s" % (text, low, high))
+        return value
+    return parse
+
+
 def _arguments():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(prog="blender -b FILE.blend --python examples/bake_blend.py --",
                                      description="Bake (or revert) ndfbake lobes for the materials of a .blend.")
     parser.add_argument("--material", action="append", default=[], metavar="NAME",
                         help="a material to bake (repeat for several); default: every material the scene needs")
-    parser.add_argument("--max-lobes", type=int, default=4, help="vMF lobes per texel at most (1..8, default 4)")
-    parser.add_argument("--tolerance", type=float, default=0.0,
-                        help="relative error a texel may keep: fewer lobes where it suffices (default 0)")
+    parser.add_argument("--max-lobes", type=_bounded(int, 1, 8), default=4,
+                        help="vMF lobes per texel at most (1..8, default 4)")
+    parser.add_argument("--tolerance", type=_bounded(float, 0.0, 1.0), default=0.0,
+                        help="relative error a texel may keep, 0..1: fewer lobes where it suffices (default 0)")
     parser.add_argument("--level-of-detail", choices=("scene", "renderer"), default="scene",
                         help="scene (default): the node group picks a level per pixel from the scene camera and "
                              "only the levels the cameras reach are baked; renderer: level 0, filtered by the "
@@ -104,7 +119,12 @@ def main():
             failures += 1
             print("FAILED %s [%s]: %s" % (material.name, e.code, e.message))
     if changed and not args.no_save:
-        bpy.ops.wm.save_mainfile()
+        try:
+            bpy.ops.wm.save_mainfile()
+        except RuntimeError as e:
+            print("FAILED saving %s: %s; nothing was saved, and the new lobe folders, which no saved "
+                  ".blend uses, are deleted" % (bpy.data.filepath, str(e).strip()))
+            return 1
         # What closing the file does (also at exit): the lobe folders no saved .blend uses go.
         addon.lobe_folders.delete_unused_folders()
     print("%s %d of %d materials in %.1f s%s" % ("reverted" if args.revert else "baked", changed, len(materials),
@@ -114,4 +134,10 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        status = main()
+    except Exception:  # a bug: Blender would print it and still exit 0
+        import traceback
+        traceback.print_exc()
+        status = 1
+    sys.exit(status)

@@ -42,6 +42,7 @@ def register():
 
 
 def unregister():
+    operators.stop_running_bakes(bpy.context)
     lobe_folders.remove_handlers()  # and nothing of this session is deleted any more
     del bpy.types.Material.ndfbake_settings
     for cls in reversed(ui.classes + operators.classes):

@@ -145,7 +145,8 @@ def prepare(material, settings=None):
     if settings.level_of_detail not in ("SCENE", "RENDERER"):
         raise BakeError("BAD_SETTINGS", "level of detail must be SCENE or RENDERER, got %r" % settings.level_of_detail)
     lod, lod_note = _plan_lod(material, scan, settings)
-    return BakeJob(material_name=material.name, image_path=scan.image_path, folder=relative,
+    return BakeJob(material_name=material.name, material_pointer=material.as_pointer(),
+                   image_path=scan.image_path, folder=relative,
                    out_dir=absolute + lobe_folders.PENDING_SUFFIX, final_dir=absolute,
                    wrap=native.WRAP_REPEAT if scan.wrap == "REPEAT" else native.WRAP_CLAMP,
                    roughness=min(max(scan.roughness, 0.01), 1.0), settings=settings,
@@ -161,8 +162,9 @@ class BakeJob:
     a modal operator drive it from Blender's main thread."""
 
     def __init__(self, material_name, image_path, folder, out_dir, final_dir, wrap, roughness, settings, targets,
-                 lod=None, lod_note=""):
+                 lod=None, lod_note="", material_pointer=0):
         self.material_name = material_name
+        self.material_pointer = material_pointer  # Material.as_pointer() when prepared: follows a rename
         self.image_path = image_path
         self.folder = folder
         self.out_dir = out_dir   # where the library writes: the pending folder, final_dir once committed
@@ -360,20 +362,44 @@ def summarize(report, seconds, lobes):
                seconds))
 
 
+def _job_material(job):
+    """The material the job was prepared for, renamed or not; by name where an undo during the
+    bake rebuilt the data (then _check_unchanged decides whether it is still the same)."""
+    for material in bpy.data.materials:
+        if material.as_pointer() == job.material_pointer:
+            return material
+    return bpy.data.materials.get(job.material_name)
+
+
+def _check_unchanged(material, job):
+    """Refuses to apply a bake to a material whose normal map changed while it ran: another
+    image, another chain of nodes, a Normal Map no longer in tangent space, another extension."""
+    scan = material_scan.scan(material)
+    if not scan.ok:
+        why = scan.problem.message
+    elif scan.image_path != job.image_path:
+        why = "its normal map is now %s" % scan.image_path
+    elif [(t.principled, t.normal_map, t.image_texture) for t in scan.targets] != list(job.targets):
+        why = "its normal-map nodes changed"
+    elif (native.WRAP_REPEAT if scan.wrap == "REPEAT" else native.WRAP_CLAMP) != job.wrap:
+        why = "its image's extension changed"
+    else:
+        return
+    raise BakeError("MATERIAL_CHANGED", "material '%s' changed during the bake (%s); bake it again"
+                    % (material.name, why))
+
+
 def finish(job):
     """After a successful run(): moves a pending job's files into place, loads the lobe textures,
     builds the node group, bypasses the Principled BSDF(s) and stores the bake record. Replaces a
     previous bake's nodes."""
     if job.error is not None:
         raise job.error
-    material = bpy.data.materials.get(job.material_name)
+    material = _job_material(job)
     if material is None or material.node_tree is None:
         raise BakeError("MATERIAL_GONE", "material '%s' went away during the bake" % job.material_name)
+    _check_unchanged(material, job)
     tree = material.node_tree
-    for principled, normal_map, texture in job.targets:
-        if any(tree.nodes.get(n) is None for n in (principled, normal_map, texture)):
-            raise BakeError("MATERIAL_CHANGED", "the nodes of '%s' changed during the bake; bake again"
-                            % material.name)
     _commit_pending(job)
     report = _read_report(job.out_dir)
     # The cheapest group that does: slots no texel uses (a tolerance left them empty) are all zero.

@@ -192,7 +192,8 @@ def delete_folders(folders):
 
 def unused_folders():
     """The lobe folders beside this .blend (by their suffix) that nothing in this file uses, for
-    the user to delete (ndfbake.delete_unused_folders): other .blend files may still use them."""
+    the user to delete (ndfbake.delete_unused_folders): other .blend files may still use them.
+    Also the pending folders of bakes that no longer run (left by a crash or a killed Blender)."""
     if not bpy.data.filepath:
         return []
     parent = os.path.dirname(os.path.abspath(bpy.data.filepath))
@@ -200,7 +201,11 @@ def unused_folders():
     folders = []
     for name in sorted(os.listdir(parent)):
         path = os.path.join(parent, name)
-        if name.endswith(FOLDER_SUFFIX) and os.path.isdir(path) and _key(path) not in used:
+        if not os.path.isdir(path):
+            continue
+        if name.endswith(FOLDER_SUFFIX) and _key(path) not in used:
+            folders.append(path)
+        elif name.endswith(FOLDER_SUFFIX + PENDING_SUFFIX) and _key(path[:-len(PENDING_SUFFIX)]) not in _reserved:
             folders.append(path)
     return folders
 

@@ -132,7 +132,7 @@ def candidate_paths():
     paths = []
     env = os.environ.get(ENV_VARIABLE)
     if env:
-        paths.append(env)
+        paths.append(os.path.abspath(env))
     paths.append(os.path.join(here, LIBRARY_NAME))
     checkout = os.path.normpath(os.path.join(here, "..", ".."))
     if os.path.isfile(os.path.join(checkout, "native", "include", "ndfbake.h")):  # a source checkout
@@ -362,6 +362,10 @@ def load():
         if _failure is not None:
             raise LibraryError(_failure)
         tried = []
+        env = os.environ.get(ENV_VARIABLE)
+        if env and not os.path.isfile(env):  # asked for: not silently another library
+            _failure = "%s=%s is not a file; point it at libndfbake.so or unset it" % (ENV_VARIABLE, env)
+            raise LibraryError(_failure)
         for path in candidate_paths():
             if not os.path.isfile(path):
                 tried.append(path)

@@ -47,6 +47,10 @@ class NDFBAKE_PT_material(bpy.types.Panel):
         lib, message = native.status()
         if lib is None:
             _wrapped(layout.box(), message, icon="ERROR")
+            # Revert and the folder cleanup need no library.
+            if bake.is_baked(material):
+                layout.operator(operators.NDFBAKE_OT_revert.bl_idname, icon="LOOP_BACK")
+            layout.operator(operators.NDFBAKE_OT_delete_unused_folders.bl_idname, icon="TRASH")
             return
 
         job = operators.running_job

@@ -629,6 +629,44 @@ def test_a_linked_action_is_refused():
         h.cleanup(directory)
 
 
+def test_a_material_changed_during_the_bake_is_not_baked():
+    """What the worker fitted must be what the material shows: a normal map swapped or set to
+    object space while the bake ran refuses it (MATERIAL_CHANGED, nothing changed, no folder); a
+    renamed material still gets its bake."""
+    from ndfbake import bake
+    directory = h.temp_dir()
+    try:
+        material = h.baked_scene(directory)
+        tree = material.node_tree
+        texture = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeTexImage")
+        normal_map = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeNormalMap")
+        other = bpy.data.images.load(h.write_normal_map(os.path.join(directory, "other.png"), "weave", 64))
+        other.colorspace_settings.name = "Non-Color"
+        before, original_image = h.dump_material(material), texture.image
+        changes = [(lambda: setattr(texture, "image", other), lambda: setattr(texture, "image", original_image)),
+                   (lambda: setattr(normal_map, "space", "OBJECT"), lambda: setattr(normal_map, "space", "TANGENT"))]
+        for change, undo in changes:
+            job = bake.prepare(material, bake.BakeSettings(max_lobes=1))
+            job.run()
+            change()
+            try:
+                bake.finish(job)
+                raise AssertionError("a bake of a changed material was applied")
+            except bake.BakeError as e:
+                h.expect(e.code == "MATERIAL_CHANGED", "%s: %s" % (e.code, e.message))
+                bake.discard_pending(job)
+            undo()
+            h.expect(h.dump_material(material) == before, "the refused bake changed the material")
+            h.expect(not [f for f in os.listdir(directory) if ".ndfbake" in f], "files left: %s" % os.listdir(directory))
+        job = bake.prepare(material, bake.BakeSettings(max_lobes=1))
+        job.run()
+        material.name = "Renamed"
+        bake.finish(job)
+        h.expect(bake.is_baked(bpy.data.materials["Renamed"]), "the renamed material did not get its bake")
+    finally:
+        h.cleanup(directory)
+
+
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_bake_adds_only_the_group_and_bypass, test_failure_while_building_nodes_rolls_back,
@@ -638,4 +676,5 @@ if __name__ == "__main__":
            test_edits_on_the_group_node_survive_rebake_and_revert, test_two_materials_sharing_an_action_bake_and_revert,
            test_nla_strips_and_driver_variables_follow_the_inputs, test_curve_settings_and_deletions_on_the_node_survive,
            test_a_copy_sharing_the_action_keeps_its_own_edits,
-           test_driver_variables_by_socket_name_and_on_the_material_follow, test_a_linked_action_is_refused])
+           test_driver_variables_by_socket_name_and_on_the_material_follow, test_a_linked_action_is_refused,
+           test_a_material_changed_during_the_bake_is_not_baked])

@@ -8,7 +8,9 @@ Space is sRGB), and an unrendered "Hidden" one. The script runs in a separate `b
   specific failure, saves the file: Good is baked, Bad and Hidden are exactly as they were;
 - naming Good alone exits 0 (a new folder; the replaced one stays, the first run's saved file used
   it); --revert restores Good exactly (the folders stay for the same reason);
-- an unknown material exits 2, changing nothing.
+- an unknown material and --max-lobes 0 exit 2, changing nothing;
+- a bake whose .blend cannot be saved exits 1 with a FAILED line, and its lobe folder, which no
+  saved file uses, goes.
 """
 import os
 import sys
@@ -68,7 +70,18 @@ def test_command_line_bake_and_revert():
         mtime = os.path.getmtime(blend)
         code, out = h.run_bake_blend(blend, "--material", "Nope")
         h.expect(code == 2 and "no material named 'Nope'" in out, "unknown material: exit %d\n%s" % (code, out))
+        code, out = h.run_bake_blend(blend, "--max-lobes", "0")
+        h.expect(code == 2 and "0 is not in 1..8" in out, "--max-lobes 0: exit %d\n%s" % (code, out))
         h.expect(os.path.getmtime(blend) == mtime, "the .blend was saved after a usage error")
+
+        # Blender writes "<file>@" and renames it over the file: a folder of that name makes the
+        # save fail (for root too, unlike permissions).
+        os.mkdir(blend + "@")
+        code, out = h.run_bake_blend(blend, "--material", "Good")
+        h.expect(code == 1 and "FAILED saving %s" % blend in out, "a failed save: exit %d\n%s" % (code, out))
+        h.expect(os.path.getmtime(blend) == mtime, "the .blend changed although its save failed")
+        h.expect(sorted(f for f in os.listdir(directory) if ".ndfbake" in f) == ["Good.ndfbake", "Good~2.ndfbake"],
+                 "the unsaved bake's folder was left: %s" % os.listdir(directory))
     finally:
         h.cleanup(directory)
 

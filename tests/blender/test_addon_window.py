@@ -15,8 +15,10 @@ Steps, driven by bpy.app.timers from Blender's own event loop:
 4. Ctrl-Z (ed.undo, as the key does) after the bake restores the material as it was before the
    bake, and Ctrl-Shift-Z (ed.redo) brings the baked material back.
 5. Bake All from the UI with a second material: Esc while the second material fits leaves both
-   materials and all files as they were (the first one's finished bake is discarded); run again
-   to the end, it bakes both.
+   materials and all files as they were (the first one's finished bake is discarded); so does Esc
+   pressed when the first material's bake has just finished, before the operator has seen it; run
+   again to the end, it bakes both, into folders without a ~2 (the cancelled bakes gave their folder
+   names back).
 6. The second material is reverted and Blender quits without saving (wm.quit_blender): after
    Blender writes quit.blend (File > Recover > Last Session) and the add-on's exit handler runs,
    both bakes' folders are still there, although no save used them: quit.blend holds the first
@@ -89,7 +91,7 @@ def _invoke_bake():
 
 
 def _tick():
-    from ndfbake import bake, lobe_folders, operators
+    from ndfbake import bake, lobe_folders, material_scan, operators
     state["ticks"] += 1
     step = state["step"]
     if step == "start":
@@ -240,11 +242,36 @@ def _tick():
         window, area, region = _properties_area()
         with bpy.context.temp_override(window=window, area=area, region=region):
             h.expect(bpy.ops.ndfbake.bake_all("INVOKE_DEFAULT") == {"RUNNING_MODAL"}, "Bake All did not start")
+        # Esc after the first material's bake has finished but before the operator saw it (its
+        # timer cannot run while this callback waits): that bake must be dropped too.
+        job = operators.running_job
+        deadline = time.time() + 60
+        while not job.done and time.time() < deadline:
+            time.sleep(0.005)
+        window.event_simulate(type="ESC", value="PRESS")
+        window.event_simulate(type="ESC", value="RELEASE")
+        state["step"] = "all_cancelled_late"
+    elif step == "all_cancelled_late":
+        if operators.running_job is not None:
+            return 0.05
+        materials, files = state["all_before"]
+        now = {m.name: h.dump_material(m) for m in bpy.data.materials if m.node_tree}
+        h.expect(now == materials, "Esc after a finished bake in Bake All changed materials: %s"
+                 % h.differences(materials, now))
+        h.expect(_snapshot(state["dir"]) == files, "Esc after a finished bake in Bake All changed files: %s" % sorted(
+            set(_snapshot(state["dir"])) ^ set(files)))
+        print("Esc during Bake All (first material just finished): no material and no file changed", flush=True)
+        window, area, region = _properties_area()
+        with bpy.context.temp_override(window=window, area=area, region=region):
+            h.expect(bpy.ops.ndfbake.bake_all("INVOKE_DEFAULT") == {"RUNNING_MODAL"}, "Bake All did not start")
         state["step"] = "all_done"
     elif step == "all_done":
         if operators.running_job is not None:
             return 0.05
         h.expect(all(bake.is_baked(bpy.data.materials[n]) for n in ("Window", "Second")), "Bake All did not bake both")
+        second_folder = lobe_folders.record_folder(material_scan.record(bpy.data.materials["Second"]))
+        h.expect(os.path.basename(second_folder) == "Second.ndfbake", "the cancelled bakes kept their folder names: "
+                 "Second went to %s" % second_folder)
         h.expect(not [n for n in os.listdir(state["dir"]) if n.endswith(lobe_folders.PENDING_SUFFIX)], "pending folders left")
         print("Bake All from the UI baked both materials", flush=True)
         _quit_without_saving()
