@@ -84,6 +84,21 @@ def _snapshot(directory):
     return result
 
 
+def _press_esc():
+    window = bpy.context.window_manager.windows[0]
+    window.event_simulate(type="ESC", value="PRESS")
+    window.event_simulate(type="ESC", value="RELEASE")
+
+
+def _expect_as_before_bake_all(when):
+    materials, files = state["all_before"]
+    now = {m.name: h.dump_material(m) for m in bpy.data.materials if m.node_tree}
+    h.expect(now == materials, "Esc in Bake All (%s) changed materials: %s" % (when, h.differences(materials, now)))
+    h.expect(_snapshot(state["dir"]) == files, "Esc in Bake All (%s) changed files: %s" % (when, sorted(
+        set(_snapshot(state["dir"])) ^ set(files))))
+    print("Esc during Bake All (%s): no material and no file changed" % when, flush=True)
+
+
 def _invoke_bake():
     window, area, region = _properties_area()
     with bpy.context.temp_override(window=window, area=area, region=region):
@@ -170,9 +185,7 @@ def _tick():
             return 0.02
         state["job"] = job
         state["esc_at"] = (job.stage, job.fraction, time.time())
-        window = bpy.context.window_manager.windows[0]
-        window.event_simulate(type="ESC", value="PRESS")
-        window.event_simulate(type="ESC", value="RELEASE")
+        _press_esc()
         state["step"] = "cancelled"
         return 0.05
     elif step == "cancelled":
@@ -225,19 +238,12 @@ def _tick():
         h.expect(job is not None, "Bake All ended before the second material")
         if job.material_name != "Second" or job.stage != "fit":
             return 0.02
-        window = bpy.context.window_manager.windows[0]
-        window.event_simulate(type="ESC", value="PRESS")
-        window.event_simulate(type="ESC", value="RELEASE")
+        _press_esc()
         state["step"] = "all_cancelled"
     elif step == "all_cancelled":
         if operators.running_job is not None:
             return 0.05
-        materials, files = state["all_before"]
-        now = {m.name: h.dump_material(m) for m in bpy.data.materials if m.node_tree}
-        h.expect(now == materials, "Esc in Bake All changed materials: %s" % h.differences(materials, now))
-        h.expect(_snapshot(state["dir"]) == files, "Esc in Bake All changed files: %s" % sorted(
-            set(_snapshot(state["dir"])) ^ set(files)))
-        print("Esc during Bake All (second material fitting): no material and no file changed", flush=True)
+        _expect_as_before_bake_all("second material fitting")
         state["hold"] = set()
         window, area, region = _properties_area()
         with bpy.context.temp_override(window=window, area=area, region=region):
@@ -248,19 +254,12 @@ def _tick():
         deadline = time.time() + 60
         while not job.done and time.time() < deadline:
             time.sleep(0.005)
-        window.event_simulate(type="ESC", value="PRESS")
-        window.event_simulate(type="ESC", value="RELEASE")
+        _press_esc()
         state["step"] = "all_cancelled_late"
     elif step == "all_cancelled_late":
         if operators.running_job is not None:
             return 0.05
-        materials, files = state["all_before"]
-        now = {m.name: h.dump_material(m) for m in bpy.data.materials if m.node_tree}
-        h.expect(now == materials, "Esc after a finished bake in Bake All changed materials: %s"
-                 % h.differences(materials, now))
-        h.expect(_snapshot(state["dir"]) == files, "Esc after a finished bake in Bake All changed files: %s" % sorted(
-            set(_snapshot(state["dir"])) ^ set(files)))
-        print("Esc during Bake All (first material just finished): no material and no file changed", flush=True)
+        _expect_as_before_bake_all("first material just finished")
         window, area, region = _properties_area()
         with bpy.context.temp_override(window=window, area=area, region=region):
             h.expect(bpy.ops.ndfbake.bake_all("INVOKE_DEFAULT") == {"RUNNING_MODAL"}, "Bake All did not start")
