@@ -130,9 +130,11 @@ _saved = set()     # keys of the folders something used while this session saved
 
 
 def created(folder):
-    """A folder this session's bake wrote: in a background Blender, deleted when the file is closed
-    unless a save used it."""
-    _created[_key(folder)] = os.path.normpath(folder)
+    """A folder this session's bake wrote: deleted when the file is closed unless a save used it.
+    Only a background Blender keeps the books: with a window, recovery files may need any folder
+    (module docstring), so none is ever deleted by itself."""
+    if bpy.app.background:
+        _created[_key(folder)] = os.path.normpath(folder)
 
 
 def _referenced():
@@ -211,9 +213,8 @@ def unused_folders():
 
 
 def deleted_at_close(folder):
-    """Whether closing the file will delete `folder` (a background Blender; this session wrote it,
-    no save used it)."""
-    return bpy.app.background and _key(folder) in _created and _key(folder) not in _saved
+    """Whether closing the file will delete `folder` (this session wrote it, no save used it)."""
+    return _key(folder) in _created and _key(folder) not in _saved
 
 
 def forget_session():
@@ -245,9 +246,8 @@ def delete_bake_files(folder, names):
 
 
 def _close_session():
-    """With a window, recovery files may need any folder (module docstring): nothing is deleted."""
     try:
-        removed, left = delete_unused_folders() if bpy.app.background else (0, [])
+        removed, left = delete_unused_folders()
         if left:
             print("ndfbake: could not delete %s" % ", ".join(left))
     except Exception as e:  # a handler must not raise into Blender's file loading or exit
