@@ -66,11 +66,8 @@ def expect_refused(material, code, fragments, directory, *, wrap=None):
 
 
 def _case(setup):
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         setup(directory)
-    finally:
-        h.cleanup(directory)
 
 
 def test_material_without_normal_map():

@@ -45,8 +45,7 @@ def _principled_count(tree, output="BSDF"):
 
 def test_bake_adds_only_the_group_and_bypass():
     from ndfbake import bake, nodes
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         before, data_before, files_before = h.dump_material(material), h.data_counts(), h.listing(directory)
         result = bake.bake_material(material, bake.BakeSettings(max_lobes=4))
@@ -112,13 +111,10 @@ def test_bake_adds_only_the_group_and_bypass():
                  % (h.data_counts(), data_before))
         h.expect([f for f in h.listing(directory) if f != "scene.blend1"] == files_before,
                  "files after revert and save: %s" % h.listing(directory))
-    finally:
-        h.cleanup(directory)
 
 
 def test_operators_rebake_fewer_lobes_and_revert():
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         material.ndfbake_settings.max_lobes = 4  # the panel's settings are the user's, not the bake's
         before, data_before = h.dump_material(material), h.data_counts()
@@ -163,14 +159,11 @@ def test_operators_rebake_fewer_lobes_and_revert():
             raise AssertionError("reverting an unbaked material must fail")
         except RuntimeError as e:
             h.expect("has no ndfbake bake" in str(e), str(e))
-    finally:
-        h.cleanup(directory)
 
 
 def test_save_reopen_then_revert():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         before = h.dump_material(material)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
@@ -189,14 +182,11 @@ def test_save_reopen_then_revert():
         h.close_file()
         # A saved .blend (and its .blend1 backup) used the folder: it is not deleted automatically.
         h.expect(os.path.isdir(os.path.join(directory, "Bumpy.ndfbake")), "the folder a saved file used was deleted")
-    finally:
-        h.cleanup(directory)
 
 
 def test_bake_all_bakes_what_the_scene_renders():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         h.reset_scene()
         png = h.write_normal_map(os.path.join(directory, "normal.png"), "fbm", 32)
         seen = h.normal_mapped_material("Seen", png)
@@ -216,14 +206,11 @@ def test_bake_all_bakes_what_the_scene_renders():
                  "bake_all touched a material it should not")
         h.expect(sorted(os.listdir(directory)) == ["Seen.ndfbake", "normal.png", "scene.blend"],
                  "files: %s" % sorted(os.listdir(directory)))
-    finally:
-        h.cleanup(directory)
 
 
 def test_linked_inputs_are_carried_and_restored():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory, metallic=1.0)
         tree = material.node_tree
         principled = tree.nodes["Principled BSDF"]
@@ -257,8 +244,6 @@ def test_linked_inputs_are_carried_and_restored():
         h.expect(abs(rec["settings"]["roughness"] - 0.5) < 1e-6, "linked roughness: the fit uses 0.5")
         bake.revert(material)
         h.expect(h.dump_material(material) == before, "material differs after revert")
-    finally:
-        h.cleanup(directory)
 
 
 def test_a_user_graph_downstream_gets_no_eevee_output():
@@ -266,8 +251,7 @@ def test_a_user_graph_downstream_gets_no_eevee_output():
     bake adds no EEVEE output (both engines draw the group's BSDF through the user's mix), and a
     displacement on the output stays where it is; Revert restores everything."""
     from ndfbake import bake, nodes
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory, metallic=1.0)
         tree = material.node_tree
         output = tree.nodes["Material Output"]
@@ -289,8 +273,6 @@ def test_a_user_graph_downstream_gets_no_eevee_output():
         bake.revert(material)
         h.expect(h.dump_material(material) == before, "material differs after revert: %s"
                  % h.differences(before, h.dump_material(material)))
-    finally:
-        h.cleanup(directory)
 
 
 def material_record(material):
@@ -300,8 +282,7 @@ def material_record(material):
 
 def test_pack_option():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         data_before = h.data_counts()
         bake.bake_material(material, bake.BakeSettings(max_lobes=1, pack=True))
@@ -309,8 +290,6 @@ def test_pack_option():
         h.expect(image.packed_file is not None, "not packed")
         bake.revert(material)
         h.expect(h.data_counts() == data_before, "packed image left after revert")
-    finally:
-        h.cleanup(directory)
 
 
 def _bake_with_a_bug_in(material, function, **settings):
@@ -332,8 +311,7 @@ def _bake_with_a_bug_in(material, function, **settings):
 
 def test_failure_while_building_nodes_rolls_back():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         before, data_before, files_before = h.dump_material(material), h.data_counts(), h.listing(directory)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
@@ -345,8 +323,6 @@ def test_failure_while_building_nodes_rolls_back():
         h.close_file()  # the first bake's folder, which the saved file does not use, goes
         h.expect([f for f in h.listing(directory) if f != "scene.blend1"] == files_before,
                  "files left after the save: %s" % h.listing(directory))
-    finally:
-        h.cleanup(directory)
 
 
 def _ramped_scene(directory):
@@ -362,8 +338,7 @@ def _ramped_scene(directory):
 
 def test_animated_inputs_keep_animating():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material, strength = _ramped_scene(directory)
         tree = material.node_tree
         principled = tree.nodes["Principled BSDF"]
@@ -388,16 +363,13 @@ def test_animated_inputs_keep_animating():
         h.expect(sorted(f.data_path for f in tree.animation_data.action.fcurves) == paths_before,
                  "keyframes after revert: %s" % [f.data_path for f in tree.animation_data.action.fcurves])
         h.expect(sorted(f.data_path for f in tree.animation_data.drivers) == drivers_before, "drivers after revert")
-    finally:
-        h.cleanup(directory)
 
 
 def test_edits_on_the_group_node_survive_rebake_and_revert():
     """After a bake the group node holds the material's inputs: a colour set and keyframed there
     is what a re-bake starts from and what Revert leaves on the Principled BSDF."""
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
         tree = material.node_tree
@@ -415,14 +387,11 @@ def test_edits_on_the_group_node_survive_rebake_and_revert():
         principled = tree.nodes["Principled BSDF"].inputs["Base Color"]
         h.expect(tuple(round(c, 3) for c in principled.default_value) == (0.0, 0.5, 0.0, 1.0),
                  "Revert did not keep the node's keyframed colour: %s" % (tuple(principled.default_value),))
-    finally:
-        h.cleanup(directory)
 
 
 def test_two_materials_sharing_an_action_bake_and_revert():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         first, _ = _ramped_scene(directory)
         second = first.copy()
         h.plane_with(second, "Second")
@@ -435,8 +404,6 @@ def test_two_materials_sharing_an_action_bake_and_revert():
         bpy.context.scene.frame_set(6)
         value = second.node_tree.nodes["ndfbake"].inputs["Emission Strength"].default_value
         h.expect(abs(value - 5.0) < 0.6, "reverting the first material stopped the second's animation (%g)" % value)
-    finally:
-        h.cleanup(directory)
 
 
 def test_nla_strips_and_driver_variables_follow_the_inputs():
@@ -445,8 +412,7 @@ def test_nla_strips_and_driver_variables_follow_the_inputs():
     back: the strip animates the node, the driver reads the node's value, Revert restores the
     paths, and the copy's strip keeps its curves."""
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         first, strength = _ramped_scene(directory)
         tree = first.node_tree
         principled = tree.nodes["Principled BSDF"]
@@ -490,8 +456,6 @@ def test_nla_strips_and_driver_variables_follow_the_inputs():
         h.expect(sorted(f.data_path for f in action.fcurves) == curves_before,
                  "the strip's curves after both Reverts: %s" % sorted(f.data_path for f in action.fcurves))
         h.expect(not [a for a in bpy.data.actions if a.name.startswith("ndfbake")], "a temporary action was left")
-    finally:
-        h.cleanup(directory)
 
 
 def _curve_state(fcurve):
@@ -505,8 +469,7 @@ def test_curve_settings_and_deletions_on_the_node_survive():
     of that (muted on the node too), and comes back the same on Revert; a driver the user removed
     on the group node stays removed on the Principled."""
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material, strength = _ramped_scene(directory)
         tree = material.node_tree
         principled = tree.nodes["Principled BSDF"]
@@ -528,16 +491,13 @@ def test_curve_settings_and_deletions_on_the_node_survive():
         h.expect(after == [before], "the curve after Revert: %s, before the bake: %s" % (after, before))
         h.expect(not tree.animation_data.drivers, "the driver removed on the node came back")
         h.expect(abs(principled.inputs["Metallic"].default_value - 0.3) < 1e-6, "Metallic was not written back")
-    finally:
-        h.cleanup(directory)
 
 
 def test_a_copy_sharing_the_action_keeps_its_own_edits():
     """Two materials share an action: keys the user sets on one are not overwritten by the other's
     bake-time copies when the other is baked or reverted."""
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         first, _ = _ramped_scene(directory)
         second = first.copy()
         h.plane_with(second, "Second")
@@ -561,8 +521,6 @@ def test_a_copy_sharing_the_action_keeps_its_own_edits():
         scene.frame_set(11)
         value = second.node_tree.nodes["ndfbake"].inputs["Emission Strength"].default_value
         h.expect(abs(value - 50.0) < 1e-4, "baking the first material undid the copy's key on its node (%g)" % value)
-    finally:
-        h.cleanup(directory)
 
 
 def test_driver_variables_by_socket_name_and_on_the_material_follow():
@@ -570,8 +528,7 @@ def test_driver_variables_by_socket_name_and_on_the_material_follow():
     while baked and the Principled after Revert; a bake that fails after the node got its inputs
     leaves the variables as they were."""
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         tree = material.node_tree
         tree.nodes["Principled BSDF"].inputs["Metallic"].default_value = 0.25
@@ -597,16 +554,13 @@ def test_driver_variables_by_socket_name_and_on_the_material_follow():
         bake.revert(material)
         h.expect([v.targets[0].data_path for v in variables] == paths, "Revert left %s"
                  % [v.targets[0].data_path for v in variables])
-    finally:
-        h.cleanup(directory)
 
 
 def test_a_linked_action_is_refused():
     """An action linked from a library cannot keep the group node's curves: LINKED_ANIMATION, and
     the material stays as it was."""
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         action = bpy.data.actions.new("Library Action")
         action.id_root = "NODETREE"
@@ -625,8 +579,6 @@ def test_a_linked_action_is_refused():
         except bake.BakeError as e:
             h.expect(e.code == "LINKED_ANIMATION" and "Library Action" in e.message, "%s: %s" % (e.code, e.message))
         h.expect(h.dump_material(material) == before, "the refused bake changed the material")
-    finally:
-        h.cleanup(directory)
 
 
 def test_a_material_changed_during_the_bake_is_not_baked():
@@ -634,8 +586,7 @@ def test_a_material_changed_during_the_bake_is_not_baked():
     object space while the bake ran refuses it (MATERIAL_CHANGED, nothing changed, no folder); a
     renamed material still gets its bake."""
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         tree = material.node_tree
         texture = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeTexImage")
@@ -663,8 +614,6 @@ def test_a_material_changed_during_the_bake_is_not_baked():
         material.name = "Renamed"
         bake.finish(job)
         h.expect(bake.is_baked(bpy.data.materials["Renamed"]), "the renamed material did not get its bake")
-    finally:
-        h.cleanup(directory)
 
 
 if __name__ == "__main__":

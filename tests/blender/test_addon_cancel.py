@@ -46,8 +46,7 @@ def _cancel_at(stage_wanted):
 
 def test_cancel_during_fit_and_during_write():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory, size=128)
         before, files_before = h.dump_material(material), _snapshot(directory)
         for stage in ("fit", "write"):
@@ -61,14 +60,11 @@ def test_cancel_during_fit_and_during_write():
             h.expect(seen[-1] == stage, "cancelled at %s, last stage %s" % (stage, seen[-1]))
             _expect_unchanged(material, directory, before, files_before, "cancel during " + stage)
             print("  cancelled during %s: nothing written, material unchanged" % stage)
-    finally:
-        h.cleanup(directory)
 
 
 def test_cancel_worker_thread_from_main_thread():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="fbm", size=256)
         before, files_before = h.dump_material(material), _snapshot(directory)
         job = bake.prepare(material, bake.BakeSettings(max_lobes=4, threads=1))
@@ -90,14 +86,11 @@ def test_cancel_worker_thread_from_main_thread():
             h.expect(e.code == "CANCELLED", e.code)
         _expect_unchanged(material, directory, before, files_before, "worker cancel")
         print("  worker cancelled at %.0f%% of the bake" % (100 * fraction))
-    finally:
-        h.cleanup(directory)
 
 
 def test_cancelled_rebake_keeps_the_previous_bake():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory, size=128)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
         baked, files_baked = h.dump_material(material), _snapshot(directory)
@@ -111,8 +104,6 @@ def test_cancelled_rebake_keeps_the_previous_bake():
                 h.expect(e.code == "CANCELLED", e.code)
             _expect_unchanged(material, directory, baked, files_baked, "cancelled re-bake at " + stage)
             h.expect(h.data_counts() == data_baked, "data-blocks changed")
-    finally:
-        h.cleanup(directory)
 
 
 if __name__ == "__main__":

@@ -29,8 +29,7 @@ def reopen(blend):
 
 def test_command_line_bake_and_revert():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         h.reset_scene()
         png = h.write_normal_map(os.path.join(directory, "normal.png"), "weave", 64)
         good = h.normal_mapped_material("Good", png)
@@ -82,8 +81,6 @@ def test_command_line_bake_and_revert():
         h.expect(os.path.getmtime(blend) == mtime, "the .blend changed although its save failed")
         h.expect(sorted(f for f in os.listdir(directory) if ".ndfbake" in f) == ["Good.ndfbake", "Good~2.ndfbake"],
                  "the unsaved bake's folder was left: %s" % os.listdir(directory))
-    finally:
-        h.cleanup(directory)
 
 
 if __name__ == "__main__":

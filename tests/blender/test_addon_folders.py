@@ -47,8 +47,7 @@ def _images_load(material):
 
 def test_names_that_clash_on_disk_get_folders_of_their_own():
     from ndfbake import bake, material_scan
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         first = h.baked_scene(directory, material_name="Metal 01")
         png = os.path.join(directory, "normal.png")
         others = [h.normal_mapped_material(name, png) for name in ("Metal_01", "metal_01")]
@@ -72,14 +71,11 @@ def test_names_that_clash_on_disk_get_folders_of_their_own():
             folder = bpy.path.abspath(material_scan.record(material)["folder"])
             h.expect(_lobe_files(folder) == kept[material.name], "%s lost files" % material.name)
             _images_load(material)
-    finally:
-        h.cleanup(directory)
 
 
 def test_a_copy_shares_the_folder_until_it_is_baked_itself():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         original = h.baked_scene(directory)
         bake.bake_material(original, bake.BakeSettings(max_lobes=2))
         folder = os.path.join(directory, "Bumpy.ndfbake")
@@ -105,14 +101,11 @@ def test_a_copy_shares_the_folder_until_it_is_baked_itself():
         h.close_file()
         h.expect(os.path.isdir(folder), "the original's folder, which a save used, was deleted")
         _images_load(copy)
-    finally:
-        h.cleanup(directory)
 
 
 def test_a_rebake_that_fails_keeps_the_previous_bake():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bake.bake_material(material, bake.BakeSettings(max_lobes=3))
         baked, listing = h.dump_material(material), h.listing(directory)
@@ -129,14 +122,11 @@ def test_a_rebake_that_fails_keeps_the_previous_bake():
         h.expect(h.listing(directory) == listing, "files changed: %s" % h.listing(directory))
         h.expect(h.dump_material(material) == baked, "the baked material changed")
         h.expect(len(_images_load(material)) == 3, "the previous bake's images")
-    finally:
-        h.cleanup(directory)
 
 
 def test_revert_and_rebake_keep_a_mix_shader_added_after_the_bake():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
         tree = material.node_tree
@@ -156,14 +146,11 @@ def test_revert_and_rebake_keep_a_mix_shader_added_after_the_bake():
         h.expect(feeds_mix() == "Principled BSDF", "after revert the mix is fed by %s" % feeds_mix())
         h.expect(output.inputs["Surface"].links[0].from_node.name == "User Mix", "the output lost the mix")
         h.expect(not [n for n in tree.nodes if n.get("ndfbake") is not None], "ndfbake nodes left")
-    finally:
-        h.cleanup(directory)
 
 
 def test_box_projection_leaves_filtering_to_the_renderer():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bpy.ops.object.camera_add(location=(0.0, 0.0, 5.0))
         bpy.context.scene.camera = bpy.context.active_object
@@ -180,8 +167,6 @@ def test_box_projection_leaves_filtering_to_the_renderer():
         h.expect(projections == {"BOX"}, "lobe textures sampled with %s" % projections)
         h.expect(not any(n.startswith("atlas") for n in os.listdir(os.path.join(directory, "Bumpy.ndfbake"))),
                  "atlases written for a box-projected texture")
-    finally:
-        h.cleanup(directory)
 
 
 def _undoable(operator, what):
@@ -193,8 +178,7 @@ def _undoable(operator, what):
 
 def test_undo_after_rebake_and_revert_finds_the_files():
     from ndfbake import bake, material_scan
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         h.baked_scene(directory)
         bpy.ops.ed.undo_push(message="ndfbake test scene")
         _undoable(bpy.ops.ndfbake.bake, "bake")
@@ -219,14 +203,11 @@ def test_undo_after_rebake_and_revert_finds_the_files():
         h.close_file()
         folders = sorted(f for f in os.listdir(directory) if f.endswith(".ndfbake"))
         h.expect(folders == [first[2:]], "after save and close: %s (the file uses only %s)" % (folders, first))
-    finally:
-        h.cleanup(directory)
 
 
 def test_save_as_elsewhere_keeps_the_textures():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
         os.makedirs(os.path.join(directory, "moved"))
@@ -240,16 +221,13 @@ def test_save_as_elsewhere_keeps_the_textures():
         bpy.ops.wm.save_mainfile()
         h.close_file()
         h.expect(os.path.isdir(folder), "the folder moved/scene.blend was saved with is gone")
-    finally:
-        h.cleanup(directory)
 
 
 def test_folders_other_blend_files_use_are_kept():
     """A folder stays while any .blend saved with it exists: the file before a Save As, a Save
     Copy, the library a material was appended from; and Ctrl-Z after a save finds its files."""
     from ndfbake import bake, lobe_folders, material_scan
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
         bpy.ops.wm.save_mainfile()
@@ -279,14 +257,11 @@ def test_folders_other_blend_files_use_are_kept():
         bpy.ops.wm.save_mainfile()
         h.close_file()
         h.expect(os.path.isdir(first), "closing shot.blend deleted the folder of the library it appended from")
-    finally:
-        h.cleanup(directory)
 
 
 def test_undo_after_a_save_finds_the_files():
     from ndfbake import material_scan
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         h.baked_scene(directory)
         bpy.ops.ed.undo_push(message="ndfbake test scene")
         _undoable(bpy.ops.ndfbake.bake, "bake")
@@ -299,14 +274,11 @@ def test_undo_after_a_save_finds_the_files():
         material = bpy.data.materials["Bumpy"]
         h.expect(material_scan.record(material)["folder"] == first, "Ctrl-Z did not bring back the first bake")
         h.expect(len(_images_load(material)) == 4, "the first bake's images after a save and Ctrl-Z")
-    finally:
-        h.cleanup(directory)
 
 
 def test_delete_unused_folders_deletes_only_what_this_file_does_not_use():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
         bpy.ops.wm.save_mainfile()
@@ -323,8 +295,6 @@ def test_delete_unused_folders_deletes_only_what_this_file_does_not_use():
         h.expect(os.path.isdir(os.path.join(directory, "Bumpy~2.ndfbake")), "the folder in use was deleted")
         h.expect(os.listdir(other) == ["notes.txt"], "a file that is not a bake file was deleted")
         _images_load(bpy.data.materials["Bumpy"])
-    finally:
-        h.cleanup(directory)
 
 
 if __name__ == "__main__":

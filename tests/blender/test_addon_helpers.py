@@ -6,6 +6,7 @@ LIB is the built libndfbake.so (NDFBAKE_LIBRARY is set to it), ZIP the add-on zi
 The add-on is imported from the source tree (addon/) and registered; test_addon_install.py checks
 the zip path instead. Not a test itself (ctest runs the files it lists).
 """
+import contextlib
 import os
 import shutil
 import subprocess
@@ -232,6 +233,16 @@ def run(tests):
 
 def cleanup(directory):
     shutil.rmtree(directory, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def scratch_dir(prefix="ndfb-addon-"):
+    """A new folder (temp_dir) for the with-block, deleted after it whatever happens."""
+    directory = temp_dir(prefix)
+    try:
+        yield directory
+    finally:
+        cleanup(directory)
 
 
 def load_pixels(path):

@@ -53,8 +53,7 @@ MIN_WINDOWS = 40                          # 4x4 windows a region needs for its f
 
 
 def test_image_error_against_references():
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         h.reset_scene()
         scene_info = demo_scene.build_scene(directory, WIDTH, HEIGHT)
         scene = bpy.context.scene
@@ -112,8 +111,6 @@ def test_image_error_against_references():
                 if bound is not None and not ratio <= bound:
                     failures.append("%s on %s: ratio %.3f > %.2f" % (what, region, ratio, bound))
         h.expect(not failures, "regressions: " + "; ".join(failures))
-    finally:
-        h.cleanup(directory)
 
 
 # ---- the command-line bake --------------------------------------------------------------------
@@ -165,8 +162,7 @@ def reopen(blend):
 
 def test_command_line_bake_changes_only_the_baked_materials():
     from ndfbake import bake, lobe_folders, nodes
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         h.reset_scene()
         scene_info = demo_scene.build_scene(directory, WIDTH, HEIGHT)
         blend = scene_info["blend"]
@@ -214,8 +210,6 @@ def test_command_line_bake_changes_only_the_baked_materials():
         h.expect(reverted == before, "the file differs from the original after revert")
         h.expect(all(os.path.isdir(f) for f in folders), "a lobe folder the saved file used is gone: %s"
                  % os.listdir(directory))
-    finally:
-        h.cleanup(directory)
 
 
 if __name__ == "__main__":

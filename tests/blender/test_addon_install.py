@@ -55,9 +55,7 @@ def test_zip_holds_the_addon_and_the_library():
 
 def test_installed_zip_loads_its_own_library_and_bakes():
     os.environ.pop("NDFBAKE_LIBRARY", None)
-    scripts = h.temp_dir("ndfb-scripts-")
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir("ndfb-scripts-") as scripts, h.scratch_dir() as directory:
         module = _install(_zip(), scripts)
         installed = os.path.join(scripts, "addons", "ndfbake")
         h.expect(os.path.dirname(os.path.abspath(module.__file__)) == installed, "module from %s" % module.__file__)
@@ -86,9 +84,6 @@ def test_installed_zip_loads_its_own_library_and_bakes():
         h.expect(h.dump_material(material) == before, "revert did not restore the material")
         import addon_utils
         addon_utils.disable("ndfbake", default_set=True)
-    finally:
-        h.cleanup(scripts)
-        h.cleanup(directory)
 
 
 # ---- an unusable library, each in its own Blender process ------------------------------------
@@ -159,8 +154,7 @@ def _fake_abi_library(path):
 def test_unusable_library_gives_one_message():
     zip_path = _zip()
     for case in ("missing", "broken", "abi"):
-        scripts = h.temp_dir("ndfb-scripts-")
-        try:
+        with h.scratch_dir("ndfb-scripts-") as scripts:
             addons = os.path.join(scripts, "addons")
             os.makedirs(addons)
             with zipfile.ZipFile(zip_path) as z:
@@ -183,8 +177,6 @@ def test_unusable_library_gives_one_message():
             h.expect(proc.returncode == 0 and "CHILD OK" in output, "%s: exit %d\n%s" % (case, proc.returncode, output))
             h.expect("Traceback" not in output, "%s: a traceback was printed:\n%s" % (case, output))
             print("  %s: %s" % (case, output.split("CHILD OK ", 1)[1].splitlines()[0]))
-        finally:
-            h.cleanup(scripts)
 
 
 if __name__ == "__main__":

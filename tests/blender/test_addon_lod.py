@@ -70,8 +70,7 @@ def test_camera_footprint_is_the_pinhole_pixel_angle():
 
 def test_material_lod_measures_texel_density_and_the_levels_reached():
     from ndfbake import scene_lod
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="bumps", size=64)  # plane of side 2, UVs 0..1
         scene = bpy.context.scene
         plane = bpy.data.objects["Plane"]
@@ -93,8 +92,6 @@ def test_material_lod_measures_texel_density_and_the_levels_reached():
         plane.hide_render = True
         lod = scene_lod.material_lod(scene, material, (64, 64))
         h.expect(lod.texels_per_unit == 0.0 and lod.levels == 7, "no visible object: %r" % (lod,))
-    finally:
-        h.cleanup(directory)
 
 
 def _emission_material(name):
@@ -122,8 +119,7 @@ def test_the_level_of_detail_group_renders_the_footprint_formula():
     from ndfbake import nodes
     from ndfbake.scene_lod import STRETCH
     h.reset_scene()
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         width, height, lens, depth = 48, 32, 18.0, 5.0  # wide angle: the view angle varies a lot
         bpy.ops.mesh.primitive_plane_add(size=100.0, location=(0.0, 0.0, -depth))
         plane = bpy.context.active_object
@@ -155,15 +151,12 @@ def test_the_level_of_detail_group_renders_the_footprint_formula():
         print("  level %.3f..%.3f, largest difference %.2e" % (expected.min(), expected.max(), error.max()))
         h.expect(expected.max() - expected.min() > 0.3, "the view angle should change the level")
         h.expect(error.max() < 2e-3, "level differs from the formula by %.4f" % error.max())
-    finally:
-        h.cleanup(directory)
 
 
 def test_atlas_lookups_equal_bilinear_filtering_of_the_level_files():
     from ndfbake import nodes
     h.reset_scene()
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         from ndfbake import native
         normal_map = h.write_normal_map(os.path.join(directory, "weave.png"), pattern="weave", size=32)
         out = os.path.join(directory, "lobes")
@@ -221,14 +214,11 @@ def test_atlas_lookups_equal_bilinear_filtering_of_the_level_files():
                 level, difference, float(np.abs(theirs).max())))
             h.expect(float(np.abs(theirs).max()) > 0.05, "level %d renders black" % level)
         h.expect(worst < 2e-3, "the atlas lookups differ from bilinear filtering by %.4f" % worst)
-    finally:
-        h.cleanup(directory)
 
 
 def test_a_bake_with_a_camera_writes_only_the_levels_it_reaches():
     from ndfbake import bake, nodes
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="fbm", size=128)
         _resolution(64, 64)
         _camera(location=(0.0, 0.0, 6.0), lens=50.0)  # the plane's 128 texels over ~36 pixels
@@ -265,14 +255,11 @@ def test_a_bake_with_a_camera_writes_only_the_levels_it_reaches():
         leftovers = [g.name for g in bpy.data.node_groups]
         h.expect(not leftovers, "revert left node groups: %s" % leftovers)
         h.expect(material.node_tree.animation_data is None, "revert left the drivers' animation data")
-    finally:
-        h.cleanup(directory)
 
 
 def test_a_mapping_node_scales_the_texel_density():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="fbm", size=128)
         _resolution(64, 64)
         _camera(location=(0.0, 0.0, 6.0), lens=50.0)
@@ -316,14 +303,11 @@ def test_a_mapping_node_scales_the_texel_density():
         result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
         h.expect("level 0 filtered by the renderer (its texture coordinates do not come from one UV map" in result.summary,
                  result.summary)
-    finally:
-        h.cleanup(directory)
 
 
 def test_texel_density_counts_only_the_material_faces_and_the_render_uv_map():
     from ndfbake import scene_lod
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="bumps", size=64)
         other = bpy.data.materials.new("Other")
         # Two 2x2 quads side by side: ours with UVs 0..1 (0.5 UV per unit), the other's 0..10.
@@ -348,8 +332,6 @@ def test_texel_density_counts_only_the_material_faces_and_the_render_uv_map():
         h.expect(abs(lod.texels_per_unit - 32.0) < 1e-3, "texel density %r, expected 32" % lod.texels_per_unit)
         lod = scene_lod.material_lod(bpy.context.scene, material, (64, 64), uv_map="Edit")
         h.expect(abs(lod.texels_per_unit - 64.0) < 1e-3, "named UV map: %r, expected 64" % lod.texels_per_unit)
-    finally:
-        h.cleanup(directory)
 
 
 if __name__ == "__main__":

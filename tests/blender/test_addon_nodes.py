@@ -89,8 +89,7 @@ def render(scene, engine, path, width, height):
 
 def test_decode_group_matches_the_rule_in_both_engines():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="scratches", size=SIZE, roughness=ROUGHNESS)
         bake.bake_material(material, bake.BakeSettings(max_lobes=4))
         # Level 0 (one fine normal per texel: κ huge) and level 2 (8x8 texels of 16 normals each:
@@ -163,8 +162,6 @@ def test_decode_group_matches_the_rule_in_both_engines():
                         h.expect(worst < 2e-3, "%s level %d lobe %d normal: max error %.4g" % (
                             engine, level, j, worst))
             print("%s: decode group matches the rule on levels 0 and 2, 4 lobes" % engine)
-    finally:
-        h.cleanup(directory)
 
 
 GRAZING_ROUGHNESS = (0.3, 0.5, 0.7, 0.9)       # widened roughness, one column each
@@ -185,8 +182,7 @@ def test_grazing_group_matches_its_formula_in_both_engines():
     every pixel), each showing as emission the group's output for one widened roughness and one
     constant lobe normal tilted from the view."""
     from ndfbake import nodes
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         h.reset_scene()
         scene = bpy.context.scene
         for column, roughness in enumerate(GRAZING_ROUGHNESS):
@@ -219,8 +215,6 @@ def test_grazing_group_matches_its_formula_in_both_engines():
             worst = float(np.abs(centres - want).max())
             h.expect(worst < 2e-3, "%s: grazing roughness off by %.4g\n%s\n%s" % (engine, worst, centres, want))
             print("%s: grazing roughness matches its formula (max error %.1e)" % (engine, worst))
-    finally:
-        h.cleanup(directory)
 
 
 if __name__ == "__main__":

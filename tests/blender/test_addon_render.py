@@ -42,8 +42,7 @@ def render(scene, engine, path):
 
 def test_eevee_and_cycles_render_the_baked_material():
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="bumps", size=64, roughness=0.35, metallic=0.5)
         scene = setup_scene()
         plain = {engine: render(scene, engine, os.path.join(directory, "plain-%s.exr" % engine))
@@ -60,8 +59,6 @@ def test_eevee_and_cycles_render_the_baked_material():
                 engine, mean, plain_mean, float(pixels.max()), 100 * lit))
             h.expect(mean > 0.01 and lit > 0.3, "%s: the baked material renders black" % engine)
             h.expect(0.6 < mean / plain_mean < 1.4, "%s: baked %.4f vs unbaked %.4f" % (engine, mean, plain_mean))
-    finally:
-        h.cleanup(directory)
 
 
 def test_white_furnace_keeps_the_energy_of_the_fine_normals():
@@ -69,8 +66,7 @@ def test_white_furnace_keeps_the_energy_of_the_fine_normals():
     each fine normal reflects about all the light, so the filtered lobes (far-off levels) must too.
     Cycles, 64 spp, 32² pixels of about 75 texels each; the baked mean within 3% of the original's."""
     from ndfbake import bake
-    directory = h.temp_dir()
-    try:
+    with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="bumps", size=64, roughness=0.15, metallic=1.0)
         material.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.9, 0.9, 0.9, 1.0)
         for loop in bpy.data.objects["Plane"].data.uv_layers.active.data:
@@ -95,8 +91,6 @@ def test_white_furnace_keeps_the_energy_of_the_fine_normals():
                                                                          result.summary))
         h.expect(abs(baked / plain - 1.0) < 0.03, "the filtered lobes change the furnace's energy: %.3f"
                  % (baked / plain))
-    finally:
-        h.cleanup(directory)
 
 
 if __name__ == "__main__":

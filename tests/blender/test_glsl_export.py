@@ -251,17 +251,15 @@ def check(directory):
 
 def main():
     h.import_addon(register=False)
-    directory = h.temp_dir("ndfb-glsl-")
     try:
-        check(directory)
+        with h.scratch_dir("ndfb-glsl-") as directory:
+            check(directory)
         print("PASS test_glsl_export", flush=True)
         code = 0
     except Exception:
         traceback.print_exc()
         print("FAIL test_glsl_export", flush=True)
         code = 1
-    finally:
-        h.cleanup(directory)
     os._exit(code)
 
 
