@@ -154,11 +154,9 @@ def test_operators_rebake_fewer_lobes_and_revert():
         h.close_file()
         h.expect(not [f for f in os.listdir(directory) if f.endswith(".ndfbake")],
                  "lobe folders left after the save and close: %s" % os.listdir(directory))
-        try:
-            bpy.ops.ndfbake.revert(material="Bumpy")
-            raise AssertionError("reverting an unbaked material must fail")
-        except RuntimeError as e:
-            h.expect("has no ndfbake bake" in str(e), str(e))
+        e = h.raised(RuntimeError, lambda: bpy.ops.ndfbake.revert(material="Bumpy"),
+                     "reverting an unbaked material must fail")
+        h.expect("has no ndfbake bake" in str(e), str(e))
 
 
 def test_save_reopen_then_revert():
@@ -301,12 +299,10 @@ def _bake_with_a_bug_in(material, function, **settings):
         raise RuntimeError("simulated bug")
     setattr(nodes, function, broken)
     try:
-        bake.bake_material(material, bake.BakeSettings(**settings))
-    except bake.BakeError as e:
-        return e
+        return h.raised(bake.BakeError, lambda: bake.bake_material(material, bake.BakeSettings(**settings)),
+                        "the simulated bug in nodes.%s did not surface" % function)
     finally:
         setattr(nodes, function, original)
-    raise AssertionError("the simulated bug in nodes.%s did not surface" % function)
 
 
 def test_failure_while_building_nodes_rolls_back():
@@ -573,11 +569,9 @@ def test_a_linked_action_is_refused():
             target.actions = ["Library Action"]
         material.node_tree.animation_data_create().action = bpy.data.actions["Library Action"]
         before = h.dump_material(material)
-        try:
-            bake.bake_material(material, bake.BakeSettings(max_lobes=1))
-            raise AssertionError("a material animated by a linked action was baked")
-        except bake.BakeError as e:
-            h.expect(e.code == "LINKED_ANIMATION" and "Library Action" in e.message, "%s: %s" % (e.code, e.message))
+        e = h.raised(bake.BakeError, lambda: bake.bake_material(material, bake.BakeSettings(max_lobes=1)),
+                     "a material animated by a linked action was baked")
+        h.expect(e.code == "LINKED_ANIMATION" and "Library Action" in e.message, "%s: %s" % (e.code, e.message))
         h.expect(h.dump_material(material) == before, "the refused bake changed the material")
 
 
@@ -600,12 +594,9 @@ def test_a_material_changed_during_the_bake_is_not_baked():
             job = bake.prepare(material, bake.BakeSettings(max_lobes=1))
             job.run()
             change()
-            try:
-                bake.finish(job)
-                raise AssertionError("a bake of a changed material was applied")
-            except bake.BakeError as e:
-                h.expect(e.code == "MATERIAL_CHANGED", "%s: %s" % (e.code, e.message))
-                bake.discard_pending(job)
+            e = h.raised(bake.BakeError, lambda: bake.finish(job), "a bake of a changed material was applied")
+            h.expect(e.code == "MATERIAL_CHANGED", "%s: %s" % (e.code, e.message))
+            bake.discard_pending(job)
             undo()
             h.expect(h.dump_material(material) == before, "the refused bake changed the material")
             h.expect(not [f for f in os.listdir(directory) if ".ndfbake" in f], "files left: %s" % os.listdir(directory))

@@ -51,12 +51,11 @@ def test_cancel_during_fit_and_during_write():
         before, files_before = h.dump_material(material), _snapshot(directory)
         for stage in ("fit", "write"):
             progress, seen = _cancel_at(stage)
-            try:
-                bake.bake_material(material, bake.BakeSettings(max_lobes=4), progress=progress)
-                raise AssertionError("not cancelled at %s (stages seen: %s)" % (stage, sorted(set(seen))))
-            except bake.BakeError as e:
-                h.expect(e.code == "CANCELLED", "%s: %s %s" % (stage, e.code, e.message))
-                h.expect("cancelled" in e.message and "'Bumpy'" in e.message, e.message)
+            e = h.raised(bake.BakeError,
+                         lambda: bake.bake_material(material, bake.BakeSettings(max_lobes=4), progress=progress),
+                         "not cancelled at %s (stages seen: %s)" % (stage, sorted(set(seen))))
+            h.expect(e.code == "CANCELLED", "%s: %s %s" % (stage, e.code, e.message))
+            h.expect("cancelled" in e.message and "'Bumpy'" in e.message, e.message)
             h.expect(seen[-1] == stage, "cancelled at %s, last stage %s" % (stage, seen[-1]))
             _expect_unchanged(material, directory, before, files_before, "cancel during " + stage)
             print("  cancelled during %s: nothing written, material unchanged" % stage)
@@ -79,11 +78,8 @@ def test_cancel_worker_thread_from_main_thread():
         job.join(30)
         h.expect(job.done, "the worker did not stop")
         h.expect(job.error is not None and job.error.code == "CANCELLED", "error: %r" % job.error)
-        try:
-            bake.finish(job)
-            raise AssertionError("finish() after a cancelled job must fail")
-        except bake.BakeError as e:
-            h.expect(e.code == "CANCELLED", e.code)
+        e = h.raised(bake.BakeError, lambda: bake.finish(job), "finish() after a cancelled job must fail")
+        h.expect(e.code == "CANCELLED", e.code)
         _expect_unchanged(material, directory, before, files_before, "worker cancel")
         print("  worker cancelled at %.0f%% of the bake" % (100 * fraction))
 
@@ -97,11 +93,10 @@ def test_cancelled_rebake_keeps_the_previous_bake():
         data_baked = h.data_counts()
         for stage in ("fit", "write"):
             progress, _ = _cancel_at(stage)
-            try:
-                bake.bake_material(material, bake.BakeSettings(max_lobes=3), progress=progress)
-                raise AssertionError("re-bake not cancelled")
-            except bake.BakeError as e:
-                h.expect(e.code == "CANCELLED", e.code)
+            e = h.raised(bake.BakeError,
+                         lambda: bake.bake_material(material, bake.BakeSettings(max_lobes=3), progress=progress),
+                         "re-bake not cancelled")
+            h.expect(e.code == "CANCELLED", e.code)
             _expect_unchanged(material, directory, baked, files_baked, "cancelled re-bake at " + stage)
             h.expect(h.data_counts() == data_baked, "data-blocks changed")
 

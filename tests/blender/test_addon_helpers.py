@@ -207,6 +207,15 @@ def close_file():
     return lobe_folders.delete_unused_folders()
 
 
+def raised(error_type, call, failure):
+    """The error_type exception that call() raises; fails the test with `failure` if it returns."""
+    try:
+        call()
+    except error_type as e:
+        return e
+    raise AssertionError(failure)
+
+
 def expect(condition, message):
     if not condition:
         raise AssertionError(message)

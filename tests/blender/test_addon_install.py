@@ -131,11 +131,8 @@ def child_case(case):
     panel = type("P", (), {"layout": FakeLayout(labels)})()
     module.ui.NDFBAKE_PT_material.draw(panel, type("C", (), {"material": material})())
     assert "".join("".join(labels).split()) == "".join(message.split()), labels  # the message, wrapped
-    try:
-        bpy.ops.ndfbake.bake(material="M")
-        raise AssertionError("the bake must fail without a library")
-    except RuntimeError as e:
-        assert "ndfbake: " + message in " ".join(str(e).split()), str(e)
+    e = h.raised(RuntimeError, lambda: bpy.ops.ndfbake.bake(material="M"), "the bake must fail without a library")
+    assert "ndfbake: " + message in " ".join(str(e).split()), str(e)
     print("CHILD OK " + message)
 
 
