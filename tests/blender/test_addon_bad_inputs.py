@@ -202,12 +202,7 @@ def test_linked_material():
         bake.bake_material(library, bake.BakeSettings(max_lobes=2))  # baked in its own file
         library.use_fake_user = True
         bpy.ops.wm.save_mainfile()
-        h.reset_scene()
-        with bpy.data.libraries.load(os.path.join(directory, "scene.blend"), link=True) as (source, target):
-            target.materials = ["Shared Metal"]
-        material = bpy.data.materials["Shared Metal"]
-        h.plane_with(material)
-        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "shot.blend"))
+        material = h.shot_with_material_from(directory, "Shared Metal", link=True)
         expect_refused(material, "LINKED_MATERIAL", ["'Shared Metal'", "linked from", "scene.blend"], directory)
         h.expect(not bake.materials_needing_bake(bpy.context.scene), "Bake All would bake a linked material")
         before, files_before = h.dump_material(material), h.listing(directory)

@@ -243,12 +243,7 @@ def test_folders_other_blend_files_use_are_kept():
         h.expect(os.path.isdir(second), "closing deleted the folder a Save Copy (backup.blend) uses")
 
         # The library: a baked material appended into a new file, then reverted there.
-        h.reset_scene()
-        with bpy.data.libraries.load(os.path.join(directory, "scene.blend"), link=False) as (source, target):
-            target.materials = ["Bumpy"]
-        appended = bpy.data.materials["Bumpy"]
-        h.plane_with(appended)
-        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "shot.blend"))
+        appended = h.shot_with_material_from(directory, "Bumpy", link=False)
         _images_load(appended)
         bake.revert(appended)
         bpy.ops.wm.save_mainfile()

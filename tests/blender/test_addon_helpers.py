@@ -129,6 +129,18 @@ _SKIP_PROPERTIES = {"rna_type", "inputs", "outputs", "internal_links", "dimensio
                     "texture_mapping", "color_mapping", "image_user", "interface"}
 
 
+def shot_with_material_from(directory, name, link):
+    """A new scene.blend's material `name` linked (or appended) into a new file, shot.blend in
+    `directory`, on a plane; returns the material."""
+    reset_scene()
+    with bpy.data.libraries.load(os.path.join(directory, "scene.blend"), link=link) as (source, target):
+        target.materials = [name]
+    material = bpy.data.materials[name]
+    plane_with(material)
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "shot.blend"))
+    return material
+
+
 def dump_tree(tree):
     """Every node (its RNA properties, sockets and values), link and custom property of a node tree."""
     nodes = {}

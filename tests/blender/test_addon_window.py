@@ -99,10 +99,11 @@ def _expect_as_before_bake_all(when):
     print("Esc during Bake All (%s): no material and no file changed" % when, flush=True)
 
 
-def _invoke_bake():
+def _invoke_bake(operator=None):
+    """Invokes ndfbake.bake (or `operator`) as its button does, in the Properties editor."""
     window, area, region = _properties_area()
     with bpy.context.temp_override(window=window, area=area, region=region):
-        return bpy.ops.ndfbake.bake("INVOKE_DEFAULT")
+        return (operator or bpy.ops.ndfbake.bake)("INVOKE_DEFAULT")
 
 
 def _tick():
@@ -229,9 +230,7 @@ def _tick():
         second.ndfbake_settings.max_lobes = 3  # (the panel drawing it would create the settings anyway)
         state["all_before"] = ({m.name: h.dump_material(m) for m in bpy.data.materials if m.node_tree}, _snapshot(directory))
         state["hold"] = {"Second"}
-        window, area, region = _properties_area()
-        with bpy.context.temp_override(window=window, area=area, region=region):
-            h.expect(bpy.ops.ndfbake.bake_all("INVOKE_DEFAULT") == {"RUNNING_MODAL"}, "Bake All did not start")
+        h.expect(_invoke_bake(bpy.ops.ndfbake.bake_all) == {"RUNNING_MODAL"}, "Bake All did not start")
         state["step"] = "all_cancel"
     elif step == "all_cancel":
         job = operators.running_job
@@ -245,9 +244,7 @@ def _tick():
             return 0.05
         _expect_as_before_bake_all("second material fitting")
         state["hold"] = set()
-        window, area, region = _properties_area()
-        with bpy.context.temp_override(window=window, area=area, region=region):
-            h.expect(bpy.ops.ndfbake.bake_all("INVOKE_DEFAULT") == {"RUNNING_MODAL"}, "Bake All did not start")
+        h.expect(_invoke_bake(bpy.ops.ndfbake.bake_all) == {"RUNNING_MODAL"}, "Bake All did not start")
         # Esc after the first material's bake has finished but before the operator saw it (its
         # timer cannot run while this callback waits): that bake must be dropped too.
         job = operators.running_job
@@ -260,9 +257,7 @@ def _tick():
         if operators.running_job is not None:
             return 0.05
         _expect_as_before_bake_all("first material just finished")
-        window, area, region = _properties_area()
-        with bpy.context.temp_override(window=window, area=area, region=region):
-            h.expect(bpy.ops.ndfbake.bake_all("INVOKE_DEFAULT") == {"RUNNING_MODAL"}, "Bake All did not start")
+        h.expect(_invoke_bake(bpy.ops.ndfbake.bake_all) == {"RUNNING_MODAL"}, "Bake All did not start")
         state["step"] = "all_done"
     elif step == "all_done":
         if operators.running_job is not None:
