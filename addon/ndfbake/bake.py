@@ -14,9 +14,8 @@ Files (choices the design leaves open):
 - The lobe textures go into a new folder beside the .blend named after the material,
   `//<material>.ndfbake/` (`~2`, `~3`… while earlier bakes' folders exist), and images refer to
   them with relative paths, so the .blend and its folders move together. lobe_folders.py says how
-  folders are named and when they are deleted: only if no .blend can know them (this session
-  wrote them and no save used them), when the file is closed; so Ctrl-Z after a bake, a re-bake
-  or a Revert always finds its files, and no saved .blend or backup loses its textures.
+  folders are named and when they are deleted (only where no .blend, backup or recovery file can
+  know them), so Ctrl-Z after a bake, a re-bake or a Revert always finds its files.
 - The library writes the levels the scene's cameras reach (scene_lod.py), one MIP atlas per lobe
   slot, and report.json into a pending folder beside the new lobe folder, which finish() renames
   into place only after it has checked the material: a failed or cancelled bake changes no file
@@ -119,6 +118,15 @@ def _plan_lod(material, scan, settings):
                                     "or set Level of Detail to Renderer" % (material.name, e.message)) from None
 
 
+def _native_wrap(scan):
+    return native.WRAP_REPEAT if scan.wrap == "REPEAT" else native.WRAP_CLAMP
+
+
+def _target_names(scan):
+    """(Principled BSDF, Normal Map, Image Texture) node names of each chain the bake filters."""
+    return [(t.principled, t.normal_map, t.image_texture) for t in scan.targets]
+
+
 def prepare(material, settings=None):
     """Checks the material and the library; returns a BakeJob or raises BakeError. Changes nothing.
     The native bake writes into a sibling folder '<lobe folder>.pending' that finish() moves into
@@ -148,9 +156,9 @@ def prepare(material, settings=None):
     return BakeJob(material_name=material.name, material_pointer=material.as_pointer(),
                    image_path=scan.image_path, folder=relative,
                    out_dir=absolute + lobe_folders.PENDING_SUFFIX, final_dir=absolute,
-                   wrap=native.WRAP_REPEAT if scan.wrap == "REPEAT" else native.WRAP_CLAMP,
+                   wrap=_native_wrap(scan),
                    roughness=min(max(scan.roughness, 0.01), 1.0), settings=settings,
-                   targets=[(t.principled, t.normal_map, t.image_texture) for t in scan.targets],
+                   targets=_target_names(scan),
                    lod=lod, lod_note=lod_note)
 
 
@@ -379,9 +387,9 @@ def _check_unchanged(material, job):
         why = scan.problem.message
     elif scan.image_path != job.image_path:
         why = "its normal map is now %s" % scan.image_path
-    elif [(t.principled, t.normal_map, t.image_texture) for t in scan.targets] != list(job.targets):
+    elif _target_names(scan) != list(job.targets):
         why = "its normal-map nodes changed"
-    elif (native.WRAP_REPEAT if scan.wrap == "REPEAT" else native.WRAP_CLAMP) != job.wrap:
+    elif _native_wrap(scan) != job.wrap:
         why = "its image's extension changed"
     else:
         return
