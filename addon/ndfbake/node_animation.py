@@ -34,10 +34,9 @@ def _socket_paths(node, index):
     return [(n, s) for n in nodes for s in sockets]
 
 
-def input_paths(source, target, index_pairs):
+def _input_paths(source, target, index_pairs):
     """{data path of a source input: the same form of path for its target input} for each
-    (source index, target index), every form _socket_paths knows; the first entry of each input
-    is the index form."""
+    (source index, target index), in every form _socket_paths knows."""
     paths = {}
     for i, j in index_pairs:
         for (n, s), (tn, ts) in zip(_socket_paths(source, i), _socket_paths(target, j)):
@@ -125,10 +124,14 @@ def _retarget(data_path, paths):
     return paths.get(data_path)
 
 
-def retarget_variables(material_tree, paths, source_node):
-    """Driver variables of the tree's and the material's drivers (but the drivers on the source
-    node's inputs) that read an input of `paths`, through the tree or through the material, read
-    the new path instead."""
+def retarget_variables(material_tree, source, target, index_pairs):
+    """Driver variables of the tree's and the material's drivers (but the drivers on `source`'s
+    inputs) that read input i of `source`, through the tree or through the material, read input j
+    of `target` instead, for each (i, j)."""
+    _retarget_variables(material_tree, _input_paths(source, target, index_pairs), source.name)
+
+
+def _retarget_variables(material_tree, paths, source_node):
     sets, material = _driver_sets(material_tree)
     for animation, prefix in sets:
         skip = prefix + node_prefix(source_node)
@@ -156,7 +159,7 @@ def copy_input_animation(material_tree, source, target, index_pairs, move):
     drivers go, and a target curve or driver the source no longer has goes too (the user deleted
     it). In an action that animates a node of the target's name in another tree, curves already
     at a target path and the source's curves stay (module docstring)."""
-    paths = input_paths(source, target, index_pairs)
+    paths = _input_paths(source, target, index_pairs)
     animation = material_tree.animation_data
     if animation is not None:
         for action in tree_actions(material_tree):
@@ -164,7 +167,7 @@ def copy_input_animation(material_tree, source, target, index_pairs, move):
                 continue  # refused before the bake (LINKED_ANIMATION); never written
             _move_curves(action, paths, move, keep_targets=animates_elsewhere(action, material_tree, target.name))
         _move_drivers(animation, paths, move)
-    retarget_variables(material_tree, paths, source.name)
+    _retarget_variables(material_tree, paths, source.name)
 
 
 def _move_curves(action, paths, move, keep_targets):

@@ -797,8 +797,8 @@ def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee
         if keep_edits:
             write_back_inputs(material_tree, node, principled)
         else:
-            node_animation.retarget_variables(material_tree, node_animation.input_paths(
-                node, principled, [(j, i) for i, j in _shared_inputs(principled, node).items()]), node.name)
+            node_animation.retarget_variables(material_tree, node, principled,
+                                              [(j, i) for i, j in _shared_inputs(principled, node).items()])
     node_animation.remove_node_animation(material_tree, node_name)
     if node is not None:
         leaving = [link for output in node.outputs if output.type == "SHADER" for link in output.links]
