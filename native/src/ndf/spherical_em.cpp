@@ -108,7 +108,7 @@ void e_step(const SampleBlocks& s, std::span<const VmfLobe> lobes, const LobeTer
         // The block's likelihood is summed in float (64 terms) and handed to the double total.
 #pragma omp simd
         for (size_t i = 0; i < n; ++i) {
-            lse[i] = peak[i] + fast_log_at_least_one(sum[i]);
+            lse[i] = peak[i] + fast_log_positive(sum[i]);  // sum ≥ 1: its largest term is 1
             inv[i] = w[i] / sum[i];
         }
         float block_likelihood = 0.0f, block_worst = std::numeric_limits<float>::infinity();
