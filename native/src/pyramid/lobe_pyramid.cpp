@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "math/sphere.h"
+#include "ndf/brdf_refinement.h"
 #include "pyramid/alignment.h"
 #include "pyramid/normal_bins.h"
 
@@ -86,6 +87,10 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
     const bool budgeted = settings.fit.tolerance > 0.0f && slots > 1;
     const std::vector<Vec3> budget_directions = fibonacci_hemisphere(
         std::min(settings.budget_directions, error_direction_count(settings.brdf)));
+    const std::vector<Vec3> refine_directions =
+        settings.refine ? fibonacci_hemisphere(error_direction_count(settings.brdf)) : std::vector<Vec3>();
+    const std::optional<LobeRefiner> refiner =
+        settings.refine ? std::optional<LobeRefiner>(std::in_place, settings.brdf, refine_directions) : std::nullopt;
 
     // Fitting takes one share per level ≥ 1, alignment one share in all.
     const double share = 1.0 / double(levels);
@@ -119,24 +124,27 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
                         for (const VmfLobe& lobe : child)
                             if (lobe.alpha > 0.0f) children.push_back(lobe);
                     }
-                // `scored`: the fine normals the budget scores candidates on, whichever samples EM fits.
+                // `scored`: the fine normals the budget and the refinement score lobes on,
+                // whichever samples EM fits.
+                const bool scoring = budgeted || refiner;
                 if (binned) {
                     const bool summed = accumulate_texel_bins(map, finer_bins, l, x, y, settings.wrap, *binner, scored);
                     const std::span<const NormalBin> texel_bins = binner->finish();
                     bins.append_texel(y, texel_bins);
                     bin_samples(texel_bins, samples);
-                    if (budgeted && summed) gather_footprint(map, l, x, y, settings.wrap, scored);
+                    if (scoring && summed) gather_footprint(map, l, x, y, settings.wrap, scored);
                 } else {
                     gather_footprint(map, l, x, y, settings.wrap, samples);
-                    if (budgeted) scored = samples;
+                    if (scoring) scored = samples;
                 }
-                TexelFit fit;
-                if (budgeted) {
-                    subsample_footprint(scored, settings.budget_sample_cap);
-                    const TexelErrorMeter meter(scored, settings.brdf, budget_directions);
-                    fit = fit_texel(samples, children, fit_settings, &meter);
-                } else {
-                    fit = fit_texel(samples, children, fit_settings, nullptr);
+                if (scoring) subsample_footprint(scored, refiner ? kRefineSampleCap : settings.budget_sample_cap);
+                std::optional<TexelErrorMeter> meter;
+                if (budgeted) meter.emplace(scored, settings.brdf, budget_directions);
+                TexelFit fit = fit_texel(samples, children, fit_settings, meter ? &*meter : nullptr);
+                // A texel of no more fine normals than lobes already holds them exactly.
+                if (refiner && scored.size() > size_t(slots)) {
+                    refiner->refine(scored, fit.lobes);
+                    if (meter) fit.error = meter->error(fit.lobes);
                 }
                 store_texel(level, slots, x, y, std::move(fit.lobes), fit.error);
             }

@@ -1,0 +1,310 @@
+#include "ndf/brdf_refinement.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "ndf/spherical_em.h"
+
+namespace ndfbake {
+
+namespace {
+
+// Parameters per lobe: the logit of α (a softmax keeps Σα = 1 and every α > 0), two steps in the
+// tangent plane of μ, and log κ (κ spans seven decades).
+constexpr int kLobeParameters = 4;
+constexpr int kMaxParameters = kMaxLobes * kLobeParameters;
+// The log κ step of the finite difference for ∂G/∂log κ: κ enters every BRDF's rule in closed
+// form, but through a different one each (eq. 20, 21, the GGX rule, Lambert's bands).
+constexpr float kLogKappaDifference = 0.01f;
+// A step changes log κ by at most this (a factor e), so that one bad step cannot throw a lobe from
+// sharp to uniform.
+constexpr float kMaxLogKappaStep = 1.0f;
+// Levenberg-Marquardt damping: the first λ, its bounds, and how it moves on success and failure.
+constexpr double kInitialDamping = 1e-2, kMinDamping = 1e-12, kMaxDamping = 1e8;
+constexpr double kDampingDown = 0.3, kDampingUp = 10.0;
+// A texel whose relative error is under this after the first search is left there: measured on
+// the synthetic patterns, the escape move gains nothing below it.
+constexpr double kEscapeMinError = 0.02;
+// A step that lowers the squared distance by less than this fraction ends the search.
+constexpr double kRefineConvergence = 1e-3;
+
+struct TangentFrame {
+    Vec3 t, b;
+};
+
+TangentFrame frame_of(const Vec3& mu)
+{
+    const Vec3 t = normalize_or(cross(std::abs(mu.x) < 0.9f ? Vec3{1, 0, 0} : Vec3{0, 1, 0}, mu), {1, 0, 0});
+    return {t, cross(mu, t)};
+}
+
+// The parameters a step changes, around the current lobes.
+struct LobeStep {
+    float logit = 0.0f, u = 0.0f, v = 0.0f, log_kappa = 0.0f;
+};
+
+std::vector<VmfLobe> stepped(std::span<const VmfLobe> lobes, std::span<const LobeStep> step)
+{
+    std::vector<VmfLobe> out(lobes.begin(), lobes.end());
+    float max_logit = -std::numeric_limits<float>::infinity();
+    std::array<float, kMaxLobes> logit{};
+    for (size_t j = 0; j < out.size(); ++j) {
+        logit[j] = std::log(out[j].alpha) + step[j].logit;
+        max_logit = std::max(max_logit, logit[j]);
+    }
+    float total = 0.0f;
+    for (size_t j = 0; j < out.size(); ++j) total += std::exp(logit[j] - max_logit);
+    for (size_t j = 0; j < out.size(); ++j) {
+        VmfLobe& lobe = out[j];
+        lobe.alpha = std::exp(logit[j] - max_logit) / total;
+        const TangentFrame f = frame_of(lobe.mu);
+        lobe.mu = normalize_or(lobe.mu + step[j].u * f.t + step[j].v * f.b, lobe.mu);
+        const float dk = std::clamp(step[j].log_kappa, -kMaxLogKappaStep, kMaxLogKappaStep);
+        lobe.kappa = std::clamp(lobe.kappa * std::exp(dk), kKappaMin, kKappaMax);
+    }
+    return out;
+}
+
+double squared_distance(std::span<const float> a, std::span<const float> b)
+{
+    double sum = 0.0;
+    for (size_t i = 0; i < a.size(); ++i) sum += (double(a[i]) - b[i]) * (double(a[i]) - b[i]);
+    return sum;
+}
+
+// Solves (A + λ diag A) x = −g by Cholesky; false when the damped matrix is not positive definite.
+bool damped_solve(const double* A, const double* g, int n, double lambda, double* x)
+{
+    std::array<double, kMaxParameters * kMaxParameters> L{};
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j <= i; ++j) {
+            double sum = A[i * n + j] + (i == j ? lambda * A[i * n + i] : 0.0);
+            for (int k = 0; k < j; ++k) sum -= L[size_t(i * n + k)] * L[size_t(j * n + k)];
+            if (i == j) {
+                if (!(sum > 0.0)) return false;
+                L[size_t(i * n + i)] = std::sqrt(sum);
+            } else {
+                L[size_t(i * n + j)] = sum / L[size_t(j * n + j)];
+            }
+        }
+    for (int i = 0; i < n; ++i) {  // L y = −g
+        double sum = -g[i];
+        for (int k = 0; k < i; ++k) sum -= L[size_t(i * n + k)] * x[k];
+        x[i] = sum / L[size_t(i * n + i)];
+    }
+    for (int i = n - 1; i >= 0; --i) {  // Lᵀ x = y
+        double sum = x[i];
+        for (int k = i + 1; k < n; ++k) sum -= L[size_t(k * n + i)] * x[k];
+        x[i] = sum / L[size_t(i * n + i)];
+    }
+    return true;
+}
+
+// The directions of one texel's objective in structure-of-arrays form, for vectorized loops.
+struct DirectionSet {
+    std::vector<float> x, y, z;
+    size_t size() const { return x.size(); }
+    void add(const Vec3& d) { x.push_back(d.x), y.push_back(d.y), z.push_back(d.z); }
+    Vec3 operator[](size_t i) const { return {x[i], y[i], z[i]}; }
+    // out[i] = directions[i] · v
+    void dot_with(const Vec3& v, std::span<float> out) const
+    {
+        const size_t n = size();
+        const float *px = x.data(), *py = y.data(), *pz = z.data();
+        float* o = out.data();
+#pragma omp simd
+        for (size_t i = 0; i < n; ++i) o[i] = px[i] * v.x + py[i] * v.y + pz[i] * v.z;
+    }
+};
+
+// Σ a_i b_i over independent partial sums: one vector accumulator would wait on its own additions
+// (the normal equations are a few hundred of these per step).
+float dot_product(std::span<const float> a, std::span<const float> b)
+{
+    constexpr size_t kPartialSums = 16;
+    const size_t n = a.size();
+    const float *pa = a.data(), *pb = b.data();
+    std::array<float, kPartialSums> partial{};
+    size_t i = 0;
+    for (; i + kPartialSums <= n; i += kPartialSums)
+        for (size_t l = 0; l < kPartialSums; ++l) partial[l] += pa[i + l] * pb[i + l];
+    float sum = 0.0f;
+    for (; i < n; ++i) sum += pa[i] * pb[i];
+    for (float p : partial) sum += p;
+    return sum;
+}
+
+// One texel's objective: the squared distance between the lobes' convolved mixture and the
+// reference effective BRDF over the texel's directions.
+struct Objective {
+    const BaseBrdf& brdf;
+    const DirectionSet& directions;
+    std::span<const float> reference;
+};
+
+struct FitState {
+    std::vector<VmfLobe> lobes;
+    std::vector<float> fit;  // the mixture's effective BRDF on the objective's directions
+    double cost = 0.0;
+};
+
+// Σ_j α_j G_j(d·μ_j) (eq. 20–21) on every direction, and its distance to the reference.
+FitState evaluate(const Objective& objective, std::vector<VmfLobe> lobes)
+{
+    const size_t D = objective.directions.size();
+    FitState state{std::move(lobes), std::vector<float>(D, 0.0f), 0.0};
+    std::vector<float> c(D), g(D);
+    for (const VmfLobe& lobe : state.lobes) {
+        objective.directions.dot_with(lobe.mu, c);
+        objective.brdf.convolved(lobe.kappa).eval_many(c, g, {});
+        for (size_t d = 0; d < D; ++d) state.fit[d] += lobe.alpha * g[d];
+    }
+    state.cost = squared_distance(state.fit, objective.reference);
+    return state;
+}
+
+// Levenberg-Marquardt from `state`, for at most kRefineIterations rounds. The Jacobian of the
+// residual r_d = Σ_j α_j G_j(d·μ_j) − reference_d is built a column (one parameter over every
+// direction) at a time, so that the normal equations are dot products of columns.
+void levenberg_marquardt(const Objective& objective, FitState& state)
+{
+    const size_t J = state.lobes.size(), D = objective.directions.size();
+    const int P = int(J) * kLobeParameters;
+    std::vector<float> columns(size_t(P) * D), residual(D), c(D), g(D), slope(D), wider(D), along(D);
+    auto column = [&](int i) { return std::span<float>(&columns[size_t(i) * D], D); };
+    std::array<double, kMaxParameters * kMaxParameters> A;
+    std::array<double, kMaxParameters> gradient, x;
+    std::vector<LobeStep> step(J);
+    double lambda = kInitialDamping;
+
+    for (int iteration = 0; iteration < kRefineIterations && lambda < kMaxDamping; ++iteration) {
+        for (size_t d = 0; d < D; ++d) residual[d] = state.fit[d] - objective.reference[d];
+        for (size_t j = 0; j < J; ++j) {
+            const VmfLobe& lobe = state.lobes[j];
+            objective.directions.dot_with(lobe.mu, c);
+            objective.brdf.convolved(lobe.kappa).eval_many(c, g, slope);
+            // One-sided difference inward from the κ bounds.
+            const float dlog_kappa = lobe.kappa * std::exp(kLogKappaDifference) <= kKappaMax ? kLogKappaDifference
+                                                                                            : -kLogKappaDifference;
+            objective.brdf.convolved(lobe.kappa * std::exp(dlog_kappa)).eval_many(c, wider, {});
+            const TangentFrame frame = frame_of(lobe.mu);
+            const std::span<float> logit = column(int(j) * kLobeParameters), u = column(int(j) * kLobeParameters + 1),
+                                   v = column(int(j) * kLobeParameters + 2), log_kappa = column(int(j) * kLobeParameters + 3);
+            const float a = lobe.alpha;
+            for (size_t d = 0; d < D; ++d) {
+                logit[d] = a * (g[d] - state.fit[d]);  // ∂/∂logit_j of a softmax weight
+                log_kappa[d] = a * (wider[d] - g[d]) / dlog_kappa;
+            }
+            objective.directions.dot_with(frame.t, along);
+            for (size_t d = 0; d < D; ++d) u[d] = a * slope[d] * along[d];
+            objective.directions.dot_with(frame.b, along);
+            for (size_t d = 0; d < D; ++d) v[d] = a * slope[d] * along[d];
+        }
+        for (int i = 0; i < P; ++i) {
+            gradient[size_t(i)] = dot_product(column(i), residual);
+            for (int k = 0; k <= i; ++k)
+                A[size_t(i * P + k)] = A[size_t(k * P + i)] = dot_product(column(i), column(k));
+        }
+
+        // The damped step: shrink it (raise λ) until the distance falls.
+        bool improved = false;
+        while (!improved && lambda < kMaxDamping) {
+            if (!damped_solve(A.data(), gradient.data(), P, lambda, x.data())) {
+                lambda *= kDampingUp;
+                continue;
+            }
+            for (size_t j = 0; j < J; ++j) {
+                const double* p = &x[j * kLobeParameters];
+                step[j] = {float(p[0]), float(p[1]), float(p[2]), float(p[3])};
+            }
+            FitState trial = evaluate(objective, stepped(state.lobes, step));
+            if (trial.cost < state.cost) {
+                const bool converged = state.cost - trial.cost < kRefineConvergence * state.cost;
+                state = std::move(trial);
+                if (converged) return;
+                lambda = std::max(lambda * kDampingDown, kMinDamping);
+                improved = true;
+            } else {
+                lambda *= kDampingUp;
+            }
+        }
+    }
+}
+
+// ρ_eff(d) = Σ w_q f(d·n_q) / Σ w_q (eq. 4), vectorized over the normals.
+std::vector<float> reference_brdf(std::span<const WeightedNormal> normals, const BaseBrdf& brdf,
+                                  const DirectionSet& directions)
+{
+    const size_t N = normals.size();
+    std::vector<float> nx(N), ny(N), nz(N), w(N), c(N), f(N), reference(directions.size());
+    double total = 0.0;
+    for (size_t q = 0; q < N; ++q) {
+        nx[q] = normals[q].n.x, ny[q] = normals[q].n.y, nz[q] = normals[q].n.z, w[q] = normals[q].weight;
+        total += normals[q].weight;
+    }
+    for (size_t d = 0; d < directions.size(); ++d) {
+        const Vec3 omega = directions[d];
+        for (size_t q = 0; q < N; ++q) c[q] = nx[q] * omega.x + ny[q] * omega.y + nz[q] * omega.z;
+        brdf.eval_many(c, f);
+        reference[d] = float(dot_product(w, f) / total);
+    }
+    return reference;
+}
+
+}  // namespace
+
+LobeRefiner::LobeRefiner(const BaseBrdf& brdf, std::span<const Vec3> directions)
+    : brdf_(brdf), directions_(directions)
+{
+}
+
+void LobeRefiner::refine(std::span<const WeightedNormal> normals, std::vector<VmfLobe>& lobes) const
+{
+    const size_t J = lobes.size();
+    if (J == 0 || J > size_t(kMaxLobes) || normals.empty()) return;
+
+    // The cap of directions the texel's effective BRDF lives in, about its mean normal.
+    const Vec3 axis = mean_normal(normals).direction;
+    float cos_spread = 1.0f;
+    for (const WeightedNormal& s : normals) cos_spread = std::min(cos_spread, dot(axis, normalize_or(s.n, axis)));
+    for (const VmfLobe& l : lobes) cos_spread = std::min(cos_spread, dot(axis, l.mu));
+    const float radius = std::acos(std::clamp(cos_spread, -1.0f, 1.0f)) + kCapMarginWidths * brdf_.angular_width();
+    DirectionSet directions;
+    const float cos_radius = radius >= std::numbers::pi_v<float> ? -1.0f : std::cos(radius);
+    for (const Vec3& d : directions_)
+        if (dot(d, axis) >= cos_radius) directions.add(d);
+    const size_t D = directions.size();
+    if (D == 0) return;
+
+    const std::vector<float> reference = reference_brdf(normals, brdf_, directions);
+    const Objective objective{brdf_, directions, reference};
+    FitState best = evaluate(objective, lobes);
+    levenberg_marquardt(objective, best);
+
+    // One escape from the local minimum: the lightest lobe moves to where the fit falls
+    // furthest below the reference, and the search runs again.
+    const double reference_norm2 = squared_distance(reference, std::vector<float>(D, 0.0f));
+    if (J > 1 && best.cost > kEscapeMinError * kEscapeMinError * reference_norm2) {
+        size_t lightest = 0, hungriest = 0;
+        for (size_t j = 1; j < J; ++j)
+            if (best.lobes[j].alpha < best.lobes[lightest].alpha) lightest = j;
+        for (size_t d = 1; d < D; ++d)
+            if (reference[d] - best.fit[d] > reference[hungriest] - best.fit[hungriest]) hungriest = d;
+        std::vector<VmfLobe> moved = best.lobes;
+        moved[lightest].mu = directions[hungriest];
+        FitState escape = evaluate(objective, std::move(moved));
+        levenberg_marquardt(objective, escape);
+        if (escape.cost < best.cost) best = std::move(escape);
+    }
+    lobes = std::move(best.lobes);
+
+    std::erase_if(lobes, [](const VmfLobe& l) { return !(l.alpha >= kNegligibleLobeWeight); });
+    float total = 0.0f;
+    for (const VmfLobe& l : lobes) total += l.alpha;
+    for (VmfLobe& l : lobes) l.alpha /= total;
+}
+
+}  // namespace ndfbake
