@@ -77,6 +77,7 @@ class FitOptions(ctypes.Structure):
         ("max_memory_bytes", ctypes.c_uint64),
         ("max_levels", ctypes.c_uint32),
         ("starts", ctypes.c_uint32),
+        ("refine", ctypes.c_int32),
     ]
 
 

@@ -93,7 +93,7 @@ typedef struct ndfb_fit_options {
     float brdf_parameter;         /* GGX roughness (Blender's, α = r²) or Blinn-Phong exponent */
     ndfb_wrap wrap;
     int32_t align;                /* non-zero: aligned lobes (eq. 23) for hardware filtering, default 1 */
-    float alignment_strength;     /* C of eq. 23, default 0.25 */
+    float alignment_strength;     /* C of eq. 23, default 0 (slots are reordered, lobes not pulled) */
     uint32_t max_iterations;      /* EM iterations per texel at most, default 10 (hierarchical: at most 5 on binned levels) */
     ndfb_fit_method method;       /* default NDFB_FIT_HIERARCHICAL */
     uint32_t threads;             /* 0: all cores */
@@ -113,6 +113,11 @@ typedef struct ndfb_fit_options {
        also from the farthest-apart samples where a texel has more than 64, keeping the likelier
        fit (lower error on wide footprints, where the finer level's lobes trap EM). */
     uint32_t starts;
+    /* Non-zero: after EM, move every texel's lobes to where their convolved mixture is closest to
+       the exact effective BRDF of `brdf` (Levenberg-Marquardt on the relative L2 error; see
+       README "Refining for the BRDF"). Lower error for that BRDF, at 10-40x the fitting time;
+       default 0. */
+    int32_t refine;
 } ndfb_fit_options;
 
 typedef struct ndfb_write_options {

@@ -104,6 +104,39 @@ TEST_F(BakeApi, StartsAreOneOrTwoAndTheDefaultIsTheHierarchicalFitWithTwo)
         << ndfb_last_error(ctx_);
 }
 
+// The fit_error attribute of a level's lobe-0 texture: the level's mean error under the bake's BRDF.
+float level_fit_error(const std::string& folder, int level)
+{
+    char file[32];
+    std::snprintf(file, sizeof file, "/level%02d_lobe0.exr", level);
+    for (const auto& [key, value] : read_image_info(folder + file).attributes)
+        if (key == "ndfbake:fit_error") return std::stof(value);
+    ADD_FAILURE() << "no ndfbake:fit_error in " << folder << file;
+    return -1.0f;
+}
+
+TEST_F(BakeApi, RefiningForTheBrdfLowersEveryLevelsErrorAndSaysSo)
+{
+    const std::string input = synth_file(Pattern::fbm, 64, 64, "fbm.png");
+    fit_.brdf = NDFB_BRDF_BLINN_PHONG;
+    fit_.brdf_parameter = 128.0f;
+    const std::string em = path("em"), refined = path("refined");
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), em.c_str(), &decode_, &fit_, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+    fit_.refine = 1;
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), refined.c_str(), &decode_, &fit_, &write_), NDFB_OK)
+        << ndfb_last_error(ctx_);
+    // Level 1 holds each texel's four normals exactly (nothing to refine); above, at least a tenth less.
+    for (int level = 2; level < 7; ++level)
+        EXPECT_LT(level_fit_error(refined, level), 0.9f * level_fit_error(em, level)) << "level " << level;
+    for (const auto& [key, value] : read_image_info(refined + "/level03_lobe0.exr").attributes)
+        if (key == "ndfbake:refined_for_brdf") EXPECT_EQ(value, "1");
+    std::ifstream report(refined + "/report.json");
+    std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+    std::erase_if(text, [](char c) { return std::isspace(static_cast<unsigned char>(c)); });
+    EXPECT_NE(text.find("\"refined_for_brdf\":true"), std::string::npos);
+    EXPECT_NE(text.find("\"brdf\":\"blinn-phong:128\""), std::string::npos);
+}
+
 TEST_F(BakeApi, TheReportNamesTheSlotsNoTexelUsesAndTheirTexturesAreZero)
 {
     const std::string input = synth_file(Pattern::bumps, 32, 32, "bumps.png");
@@ -314,6 +347,8 @@ TEST_F(BakeApi, CommandLineReportsFailuresInOneLineWithAnExitCode)
     EXPECT_EQ(run_cli("synth weave --size 32 --out " + path("w.png"), err).exit_code, 0);
     EXPECT_EQ(run_cli("bake " + path("w.png") + " --out " + path("out") + " --quiet", err).exit_code, 0);
     EXPECT_EQ(run_cli("info " + path("out/level01_lobe0.exr"), err).exit_code, 0);
+    const CliResult refined = run_cli("bake " + path("w.png") + " --out " + path("refined") + " --refine --brdf ggx:0.3 --quiet", err);
+    EXPECT_EQ(refined.exit_code, 0) << refined.err;
 
     CliResult r = run_cli("bake " + path("nope.png") + " --out " + path("out2"), err);
     EXPECT_EQ(r.exit_code, 2);

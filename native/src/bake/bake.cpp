@@ -148,6 +148,7 @@ std::vector<ExrAttribute> file_attributes(const LobePyramid& pyramid, const Deco
         {"ndfbake:brdf", settings.brdf.to_string()},
         {"ndfbake:tolerance", settings.fit.tolerance},
         {"ndfbake:aligned", settings.align ? 1 : 0},
+        {"ndfbake:refined_for_brdf", settings.refine ? 1 : 0},
         {"ndfbake:kappa_max", kKappaMax},
         {"ndfbake:fit_error", level_error},
         {"ndfbake:version", std::string(NDFBAKE_VERSION_STRING)},
@@ -214,6 +215,7 @@ std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded,
         .value("max_iterations", settings.fit.em.max_iterations)
         .value("tolerance", settings.fit.tolerance)
         .value("brdf", settings.brdf.to_string())
+        .value("refined_for_brdf", settings.refine)
         .value("wrap", settings.wrap == WrapMode::wrap ? "repeat" : "clamp")
         .value("aligned", settings.align)
         .value("alignment_strength", settings.alignment_strength)

@@ -129,6 +129,7 @@ PyramidSettings to_pyramid(const ndfb_fit_options* o)
         require(o->starts == 1 || o->starts == 2, "starts must be 1 or 2, got " + std::to_string(o->starts));
         s.fit.two_starts = o->starts == 2;
     }
+    if (o->struct_size >= offsetof(ndfb_fit_options, refine) + sizeof(o->refine)) s.refine = o->refine != 0;
     return s;
 }
 
@@ -252,6 +253,7 @@ NDFB_API void ndfb_fit_options_init(ndfb_fit_options* o)
     o->method = d.method == FitMethod::hierarchical ? NDFB_FIT_HIERARCHICAL : NDFB_FIT_PER_LEVEL;
     o->threads = 0;
     o->starts = d.fit.two_starts ? 2 : 1;
+    o->refine = d.refine ? 1 : 0;
 }
 
 NDFB_API void ndfb_write_options_init(ndfb_write_options* o)
