@@ -89,7 +89,7 @@ TEST(BrdfRefinement, LowersTheExactErrorOfEmFitsOnEveryTexel)
 {
     for (const BaseBrdf& brdf : {BaseBrdf::blinn_phong(128.0f), BaseBrdf::ggx(0.3f), BaseBrdf::lambert()}) {
         const std::vector<Vec3> directions = fibonacci_hemisphere(error_direction_count(brdf));
-        const LobeRefiner refiner(brdf, directions);
+        const LobeRefiner refiner(brdf);
         double pattern_em = 0.0, pattern_refined = 0.0;
         for (Pattern pattern : {Pattern::fbm, Pattern::weave, Pattern::bumps}) {
             const NormalMap map = synthesize(pattern, 64, 64);
@@ -132,7 +132,7 @@ TEST(BrdfRefinement, HardCasesStayFiniteAndInBounds)
 {
     const BaseBrdf brdf = BaseBrdf::blinn_phong(128.0f);
     const std::vector<Vec3> directions = fibonacci_hemisphere(error_direction_count(brdf));
-    const LobeRefiner refiner(brdf, directions);
+    const LobeRefiner refiner(brdf);
     auto samples = [](std::initializer_list<Vec3> normals) {
         std::vector<WeightedNormal> s;
         for (const Vec3& n : normals) s.push_back({normalize_or(n, {0, 0, 1}), 1.0f});

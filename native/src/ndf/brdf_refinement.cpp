@@ -6,6 +6,8 @@
 #include <limits>
 #include <numbers>
 
+#include "math/sphere.h"
+#include "ndf/effective_brdf.h"
 #include "ndf/spherical_em.h"
 
 namespace ndfbake {
@@ -256,8 +258,9 @@ std::vector<float> reference_brdf(std::span<const WeightedNormal> normals, const
 
 }  // namespace
 
-LobeRefiner::LobeRefiner(const BaseBrdf& brdf, std::span<const Vec3> directions)
-    : brdf_(brdf), directions_(directions)
+LobeRefiner::LobeRefiner(const BaseBrdf& brdf)
+    : brdf_(brdf),
+      directions_(fibonacci_hemisphere(std::max(kMinErrorDirections, error_direction_count(brdf) / kRefineDirectionFraction)))
 {
 }
 

@@ -33,11 +33,15 @@ inline constexpr int kRefineSampleCap = 4096;
 // A refined lobe lighter than this carries nothing a shader would show and is dropped.
 inline constexpr float kNegligibleLobeWeight = 1e-4f;
 
+// The objective's directions are a Fibonacci hemisphere of this fraction of the error measure's
+// count (error_direction_count), at least kMinErrorDirections. Measured, mean error over levels
+// 1+ of a 1024² fBm map at GGX roughness 0.3 (all directions 0.2021): half 0.2021 in 0.6 of the
+// time, a quarter 0.2061 (level 2: 0.099 against 0.074; GGX's peak is narrower than its α).
+inline constexpr int kRefineDirectionFraction = 2;
+
 class LobeRefiner {
 public:
-    // `directions`: the error measure's full set for `brdf` (fibonacci_hemisphere of
-    // error_direction_count(brdf)); each texel uses the part of it near its normals.
-    LobeRefiner(const BaseBrdf& brdf, std::span<const Vec3> directions);
+    explicit LobeRefiner(const BaseBrdf& brdf);
 
     // Moves `lobes` (every α > 0, Σα = 1) towards the least relative L2 distance between their
     // convolved mixture (what the shader computes) and the normals' exact effective BRDF. Every
@@ -48,7 +52,7 @@ public:
 
 private:
     BaseBrdf brdf_;
-    std::span<const Vec3> directions_;
+    std::vector<Vec3> directions_;  // each texel uses those near its normals
 };
 
 }  // namespace ndfbake

@@ -87,10 +87,8 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
     const bool budgeted = settings.fit.tolerance > 0.0f && slots > 1;
     const std::vector<Vec3> budget_directions = fibonacci_hemisphere(
         std::min(settings.budget_directions, error_direction_count(settings.brdf)));
-    const std::vector<Vec3> refine_directions =
-        settings.refine ? fibonacci_hemisphere(error_direction_count(settings.brdf)) : std::vector<Vec3>();
     const std::optional<LobeRefiner> refiner =
-        settings.refine ? std::optional<LobeRefiner>(std::in_place, settings.brdf, refine_directions) : std::nullopt;
+        settings.refine ? std::optional<LobeRefiner>(std::in_place, settings.brdf) : std::nullopt;
 
     // Fitting takes one share per level ≥ 1, alignment one share in all.
     const double share = 1.0 / double(levels);
