@@ -116,6 +116,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
         fit.progress = progress;
         fit.progress_user = &cancel;
     }
+    fit.refine = in.ConsumeIntegralInRange<uint8_t>(0, 7) == 0;  // slow: one input in eight
     if (in.ConsumeIntegralInRange<uint8_t>(0, 31) == 0) fit.struct_size = in.ConsumeIntegral<uint32_t>();
 
     ndfb_write_options write;
@@ -179,9 +180,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
             if (status == NDFB_OK && !(std::isfinite(error) && error >= 0.0f)) {
                 std::fprintf(stderr, "texel error %g: %ux%u, %u channels, brdf %u parameter %g, level %u, J %u\n",
                              error, width, height, channels, brdf, fit.brdf_parameter, level, fit.max_lobes);
-                std::fprintf(stderr, "tolerance %g align %d strength %g iterations %u method %u wrap %u threads %u\n",
+                std::fprintf(stderr, "tolerance %g align %d strength %g iterations %u method %u wrap %u threads %u refine %d\n",
                              fit.tolerance, fit.align, fit.alignment_strength, fit.max_iterations,
-                             unsigned(fit.method), wrap, fit.threads);
+                             unsigned(fit.method), wrap, fit.threads, fit.refine);
                 if (const char* dump = std::getenv("NDFB_FUZZ_DUMP")) ndfb_normal_map_save(ctx, map, dump);
                 require(false, "texel error finite");
             }

@@ -193,6 +193,9 @@ TEST_P(PyramidHardCases, EveryLevelIsFiniteWithKappaInBounds)
         settings.wrap = wrap;
         settings.align = true;
         settings.alignment_strength = 0.25f;  // exercise eq. 23 as well
+        // The refinement too, under a sharp BRDF that resolves every planted normal.
+        settings.refine = wrap == WrapMode::clamp;
+        settings.brdf = BaseBrdf::blinn_phong(300.0f);
         const LobePyramid pyramid = build_lobe_pyramid(map, settings, {});
         ASSERT_EQ(pyramid.level_count(), level_count(w, h));
         EXPECT_EQ(pyramid.size(pyramid.level_count() - 1), (LevelSize{1, 1}));
