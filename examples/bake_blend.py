@@ -2,7 +2,7 @@
 (bake.py, the same code the Bake button runs).
 
     blender -b scene.blend --python examples/bake_blend.py -- [--material NAME ...]
-            [--max-lobes N] [--tolerance T] [--level-of-detail scene|renderer] [--pack] [--revert] [--no-save]
+            [--max-lobes N] [--tolerance T] [--refine] [--level-of-detail scene|renderer] [--pack] [--revert] [--no-save]
 
 Without --material it bakes every material the scene needs: those with a tangent-space normal
 map (Image Texture -> Normal Map -> Principled BSDF) on objects the scene renders. Each material's
@@ -68,6 +68,8 @@ def _arguments():
                         help="vMF lobes per texel at most (1..8, default 4)")
     parser.add_argument("--tolerance", type=_bounded(float, 0.0, 1.0), default=0.0,
                         help="relative error a texel may keep, 0..1: fewer lobes where it suffices (default 0)")
+    parser.add_argument("--refine", action="store_true",
+                        help="refine the lobes for each material's roughness (lower error, about 40x the fit time)")
     parser.add_argument("--level-of-detail", choices=("scene", "renderer"), default="scene",
                         help="scene (default): the node group picks a level per pixel from the scene camera and "
                              "only the levels the cameras reach are baked; renderer: level 0, filtered by the "
@@ -100,8 +102,8 @@ def main():
         print("bake_blend: nothing to %s in %s" % ("revert" if args.revert else "bake", bpy.data.filepath))
         return 0
 
-    settings = bake.BakeSettings(max_lobes=args.max_lobes, tolerance=args.tolerance, pack=args.pack,
-                                 level_of_detail=args.level_of_detail.upper())
+    settings = bake.BakeSettings(max_lobes=args.max_lobes, tolerance=args.tolerance, refine=args.refine,
+                                 pack=args.pack, level_of_detail=args.level_of_detail.upper())
     start = time.perf_counter()
     failures = 0
     changed = 0

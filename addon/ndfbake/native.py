@@ -280,7 +280,7 @@ class Context:
             raise Error(status, self.lib.status_name(status), message.decode(errors="replace"))
 
     def bake(self, input_path, out_dir, *, max_lobes=4, tolerance=0.0, roughness=0.5, wrap=WRAP_REPEAT,
-             threads=0, srgb=SRGB_AS_DATA, convention=CONVENTION_OPENGL, progress=None, source_name=None,
+             refine=False, threads=0, srgb=SRGB_AS_DATA, convention=CONVENTION_OPENGL, progress=None, source_name=None,
              max_levels=0, atlas=False):
         """ndfb_bake with a GGX base BRDF of Blender roughness `roughness`.
 
@@ -298,6 +298,7 @@ class Context:
         fit.wrap = wrap
         fit.threads = int(threads)
         fit.max_levels = int(max_levels)
+        fit.refine = 1 if refine else 0
         callback = None
         if progress is not None:
             def trampoline(_user, stage, fraction):

@@ -12,6 +12,7 @@ Space is sRGB), and an unrendered "Hidden" one. The script runs in a separate `b
 - a bake whose .blend cannot be saved exits 1 with a FAILED line, and its lobe folder, which no
   saved file uses, goes.
 """
+import json
 import os
 import sys
 
@@ -41,13 +42,15 @@ def test_command_line_bake_and_revert():
         bpy.ops.wm.save_as_mainfile(filepath=blend)
         original = reopen(blend)
 
-        code, out = h.run_bake_blend(blend, "--max-lobes", "2")
+        code, out = h.run_bake_blend(blend, "--max-lobes", "2", "--refine")
         h.expect(code == 1, "one failure must exit 1, got %d:\n%s" % (code, out))
         h.expect("baked Good into //Good.ndfbake: 2 lobes" in out, out)
         h.expect("FAILED Bad [COLOR_SPACE]: image 'srgb.png' has Color Space 'sRGB'" in out, out)
         h.expect("baked 1 of 2 materials" in out, out)
         after = reopen(blend)
         h.expect(bake.is_baked(bpy.data.materials["Good"]), "Good not baked in the saved file")
+        with open(os.path.join(directory, "Good.ndfbake", "report.json")) as f:
+            h.expect(json.load(f)["settings"]["refined_for_brdf"] is True, "--refine did not reach the library")
         h.expect(after["Bad"] == original["Bad"] and after["Hidden"] == original["Hidden"],
                  "a material that was not baked changed")
         h.expect(sorted(os.listdir(directory)) == ["Good.ndfbake", "normal.png", "scene.blend", "scene.blend1",
