@@ -110,7 +110,6 @@ struct DirectionSet {
     std::vector<float> x, y, z;
     size_t size() const { return x.size(); }
     void add(const Vec3& d) { x.push_back(d.x), y.push_back(d.y), z.push_back(d.z); }
-    Vec3 operator[](size_t i) const { return {x[i], y[i], z[i]}; }
     // out[i] = directions[i] · v
     void dot_with(const Vec3& v, std::span<float> out) const
     {
@@ -236,26 +235,6 @@ void levenberg_marquardt(const Objective& objective, FitState& state)
     }
 }
 
-// ρ_eff(d) = Σ w_q f(d·n_q) / Σ w_q (eq. 4), vectorized over the normals.
-std::vector<float> reference_brdf(std::span<const WeightedNormal> normals, const BaseBrdf& brdf,
-                                  const DirectionSet& directions)
-{
-    const size_t N = normals.size();
-    std::vector<float> nx(N), ny(N), nz(N), w(N), c(N), f(N), reference(directions.size());
-    double total = 0.0;
-    for (size_t q = 0; q < N; ++q) {
-        nx[q] = normals[q].n.x, ny[q] = normals[q].n.y, nz[q] = normals[q].n.z, w[q] = normals[q].weight;
-        total += normals[q].weight;
-    }
-    for (size_t d = 0; d < directions.size(); ++d) {
-        const Vec3 omega = directions[d];
-        for (size_t q = 0; q < N; ++q) c[q] = nx[q] * omega.x + ny[q] * omega.y + nz[q] * omega.z;
-        brdf.eval_many(c, f);
-        reference[d] = float(dot_product(w, f) / total);
-    }
-    return reference;
-}
-
 }  // namespace
 
 LobeRefiner::LobeRefiner(const BaseBrdf& brdf)
@@ -275,14 +254,17 @@ void LobeRefiner::refine(std::span<const WeightedNormal> normals, std::vector<Vm
     for (const WeightedNormal& s : normals) cos_spread = std::min(cos_spread, dot(axis, normalize_or(s.n, axis)));
     for (const VmfLobe& l : lobes) cos_spread = std::min(cos_spread, dot(axis, l.mu));
     const float radius = std::acos(std::clamp(cos_spread, -1.0f, 1.0f)) + kCapMarginWidths * brdf_.angular_width();
-    DirectionSet directions;
+    std::vector<Vec3> cap;
     const float cos_radius = radius >= std::numbers::pi_v<float> ? -1.0f : std::cos(radius);
     for (const Vec3& d : directions_)
-        if (dot(d, axis) >= cos_radius) directions.add(d);
-    const size_t D = directions.size();
+        if (dot(d, axis) >= cos_radius) cap.push_back(d);
+    const size_t D = cap.size();
     if (D == 0) return;
+    DirectionSet directions;
+    for (const Vec3& d : cap) directions.add(d);
 
-    const std::vector<float> reference = reference_brdf(normals, brdf_, directions);
+    std::vector<float> reference(D);
+    reference_effective_brdf(normals, brdf_, cap, reference);
     const Objective objective{brdf_, directions, reference};
     FitState best = evaluate(objective, lobes);
     levenberg_marquardt(objective, best);
@@ -297,7 +279,7 @@ void LobeRefiner::refine(std::span<const WeightedNormal> normals, std::vector<Vm
         for (size_t d = 1; d < D; ++d)
             if (reference[d] - best.fit[d] > reference[hungriest] - best.fit[hungriest]) hungriest = d;
         std::vector<VmfLobe> moved = best.lobes;
-        moved[lightest].mu = directions[hungriest];
+        moved[lightest].mu = cap[hungriest];
         FitState escape = evaluate(objective, std::move(moved));
         levenberg_marquardt(objective, escape);
         if (escape.cost < best.cost) best = std::move(escape);

@@ -15,13 +15,22 @@ int error_direction_count(const BaseBrdf& brdf)
 void reference_effective_brdf(std::span<const WeightedNormal> normals, const BaseBrdf& brdf,
                               std::span<const Vec3> directions, std::span<float> out)
 {
+    // The normals in structure-of-arrays form: f at every normal, for one direction at a time,
+    // in BaseBrdf::eval_many's vectorized loop.
+    const size_t N = normals.size();
+    std::vector<float> nx(N), ny(N), nz(N), cosines(N), values(N);
     double total_weight = 0.0;
-    for (const WeightedNormal& s : normals) total_weight += s.weight;
+    for (size_t q = 0; q < N; ++q) {
+        nx[q] = normals[q].n.x, ny[q] = normals[q].n.y, nz[q] = normals[q].n.z;
+        total_weight += normals[q].weight;
+    }
     const double inv_weight = total_weight > 0.0 ? 1.0 / total_weight : 0.0;
     for (size_t d = 0; d < directions.size(); ++d) {
         const Vec3 omega = directions[d];
+        for (size_t q = 0; q < N; ++q) cosines[q] = nx[q] * omega.x + ny[q] * omega.y + nz[q] * omega.z;
+        brdf.eval_many(cosines, values);
         double sum = 0.0;
-        for (const WeightedNormal& s : normals) sum += double(s.weight) * brdf.eval(dot(omega, s.n));
+        for (size_t q = 0; q < N; ++q) sum += double(normals[q].weight) * values[q];
         out[d] = float(sum * inv_weight);
     }
 }
