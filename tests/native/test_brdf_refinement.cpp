@@ -128,6 +128,59 @@ TEST(BrdfRefinement, LowersTheExactErrorOfEmFitsOnEveryTexel)
     }
 }
 
+// Where the base BRDF is far sharper than the spread of a texel's normals, the refinement may not
+// trade the error between its directions for the error on them: measured on a dense set of
+// directions (spacing a fifth of the BRDF's width) that the refinement never sees.
+TEST(BrdfRefinement, NeverWorsensTheErrorUnderVerySharpBrdfs)
+{
+    for (const BaseBrdf& brdf : {BaseBrdf::ggx(0.1f), BaseBrdf::ggx(0.15f), BaseBrdf::blinn_phong(10000.0f)}) {
+        const LobeRefiner refiner(brdf);
+        const NormalMap map = synthesize(Pattern::fbm, 64, 64);
+        PyramidSettings settings;
+        settings.align = false;
+        const LobePyramid pyramid = build_lobe_pyramid(map, settings, {});
+        double em_total = 0.0, refined_total = 0.0;
+        for (int t = 0; t < 6; ++t) {
+            const int x = (t * 5) % 16, y = (t * 3) % 16;
+            std::vector<WeightedNormal> normals;
+            gather_footprint(map, 2, x, y, WrapMode::wrap, normals);
+            const Vec3 axis = mean_normal(normals).direction;
+            const double spacing = 0.2 * brdf.angular_width(), radius = 0.6;
+            const std::vector<Vec3> dense =
+                fibonacci_cap(axis, radius, int(cap_solid_angle(radius) / (spacing * spacing)), 0.25);
+            const TexelErrorMeter meter(normals, brdf, dense);
+            std::vector<VmfLobe> lobes = pyramid.texel_lobes(2, x, y);
+            const float em = meter.error(lobes);
+            refiner.refine(normals, lobes);
+            expect_valid(lobes);
+            const float refined = meter.error(lobes);
+            EXPECT_LE(refined, em * 1.01f + 1e-4f) << brdf.to_string() << " texel " << t;
+            em_total += em;
+            refined_total += refined;
+        }
+        std::printf("%-18s dense directions: EM %.4f, refined %.4f\n", brdf.to_string().c_str(), em_total / 6,
+                    refined_total / 6);
+    }
+}
+
+// One lobe has no weight to move (its softmax column is zero) but its μ and κ still move.
+TEST(BrdfRefinement, ASingleLobeFromAPoorStartImproves)
+{
+    for (const BaseBrdf& brdf : {BaseBrdf::blinn_phong(128.0f), BaseBrdf::ggx(0.3f)}) {
+        const LobeRefiner refiner(brdf);
+        const NormalMap map = synthesize(Pattern::bumps, 64, 64);
+        std::vector<WeightedNormal> normals;
+        gather_footprint(map, 3, 2, 5, WrapMode::wrap, normals);
+        const std::vector<Vec3> directions = fibonacci_hemisphere(error_direction_count(brdf));
+        const TexelErrorMeter meter(normals, brdf, directions);
+        std::vector<VmfLobe> lobes{{1.0f, normalize_or({0.2f, 0.1f, 0.97f}, {0, 0, 1}), 1.5f}};
+        const float before = meter.error(lobes);
+        refiner.refine(normals, lobes);
+        expect_valid(lobes);
+        EXPECT_LT(meter.error(lobes), 0.8f * before) << brdf.to_string();
+    }
+}
+
 TEST(BrdfRefinement, HardCasesStayFiniteAndInBounds)
 {
     const BaseBrdf brdf = BaseBrdf::blinn_phong(128.0f);

@@ -11,4 +11,12 @@ namespace ndfbake {
 // equal area per point. Half vectors of lights and views above the surface live here.
 std::vector<Vec3> fibonacci_hemisphere(int count);
 
+// `count` directions spread evenly over the spherical cap of angular radius `radius` about the
+// unit vector `axis` (a Fibonacci spiral), of which those below the horizon (z < 0) are left out.
+// `phase` ∈ [0, 1) turns the spiral: two phases give two interleaved sets.
+std::vector<Vec3> fibonacci_cap(const Vec3& axis, double radius, int count, double phase);
+
+// Solid angle of a cap of angular radius `radius`: 2π(1 − cos radius).
+double cap_solid_angle(double radius);
+
 }  // namespace ndfbake

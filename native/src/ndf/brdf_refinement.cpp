@@ -30,6 +30,8 @@ constexpr double kDampingDown = 0.3, kDampingUp = 10.0;
 // A texel whose relative error is under this after the first search is left there: measured on
 // the synthetic patterns, the escape move gains nothing below it.
 constexpr double kEscapeMinError = 0.02;
+// See damped_solve.
+constexpr double kMinRelativeDamping = 1e-9;
 // A step that lowers the squared distance by less than this fraction ends the search.
 constexpr double kRefineConvergence = 1e-3;
 
@@ -77,13 +79,18 @@ double squared_distance(std::span<const float> a, std::span<const float> b)
     return sum;
 }
 
-// Solves (A + λ diag A) x = −g by Cholesky; false when the damped matrix is not positive definite.
+// Solves (A + λ D) x = −g by Cholesky, D = diag A with every entry at least kMinRelativeDamping
+// of its largest (a parameter the residual does not depend on, such as the weight of a single
+// lobe or κ where GGX's α' is clamped at 1, has a zero column and would otherwise leave the matrix
+// singular for every λ); false when the damped matrix is not positive definite.
 bool damped_solve(const double* A, const double* g, int n, double lambda, double* x)
 {
+    double largest = 0.0;
+    for (int i = 0; i < n; ++i) largest = std::max(largest, A[i * n + i]);
     std::array<double, kMaxParameters * kMaxParameters> L{};
     for (int i = 0; i < n; ++i)
         for (int j = 0; j <= i; ++j) {
-            double sum = A[i * n + j] + (i == j ? lambda * A[i * n + i] : 0.0);
+            double sum = A[i * n + j] + (i == j ? lambda * std::max(A[i * n + i], kMinRelativeDamping * largest) : 0.0);
             for (int k = 0; k < j; ++k) sum -= L[size_t(i * n + k)] * L[size_t(j * n + k)];
             if (i == j) {
                 if (!(sum > 0.0)) return false;
@@ -237,29 +244,33 @@ void levenberg_marquardt(const Objective& objective, FitState& state)
 
 }  // namespace
 
-LobeRefiner::LobeRefiner(const BaseBrdf& brdf)
-    : brdf_(brdf),
-      directions_(fibonacci_hemisphere(std::max(kMinErrorDirections, error_direction_count(brdf) / kRefineDirectionFraction)))
-{
-}
+LobeRefiner::LobeRefiner(const BaseBrdf& brdf) : brdf_(brdf) {}
 
 void LobeRefiner::refine(std::span<const WeightedNormal> normals, std::vector<VmfLobe>& lobes) const
 {
     const size_t J = lobes.size();
     if (J == 0 || J > size_t(kMaxLobes) || normals.empty()) return;
 
-    // The cap of directions the texel's effective BRDF lives in, about its mean normal.
+    // The caps of directions the texel's effective BRDF lives in, about its mean normal.
     const Vec3 axis = mean_normal(normals).direction;
     float cos_spread = 1.0f;
     for (const WeightedNormal& s : normals) cos_spread = std::min(cos_spread, dot(axis, normalize_or(s.n, axis)));
     for (const VmfLobe& l : lobes) cos_spread = std::min(cos_spread, dot(axis, l.mu));
-    const float radius = std::acos(std::clamp(cos_spread, -1.0f, 1.0f)) + kCapMarginWidths * brdf_.angular_width();
-    std::vector<Vec3> cap;
-    const float cos_radius = radius >= std::numbers::pi_v<float> ? -1.0f : std::cos(radius);
-    for (const Vec3& d : directions_)
-        if (dot(d, axis) >= cos_radius) cap.push_back(d);
+    const double spread = std::acos(std::clamp(double(cos_spread), -1.0, 1.0));
+    const double width = brdf_.angular_width();
+    float min_kappa = kKappaMax;
+    for (const VmfLobe& l : lobes) min_kappa = std::min(min_kappa, l.kappa);
+    const double lobe_width = std::sqrt(width * width + 1.0 / min_kappa);
+    // A broad BRDF (Lambert, rough GGX) still gets at least the error measure's least density.
+    const double spacing = std::min(kRefineSpacingWidths * width, std::sqrt(2.0 * std::numbers::pi / kMinErrorDirections));
+    const double objective_radius = spread + kCapMarginWidths * width;
+    const double check_radius = spread + kCapMarginWidths * lobe_width;
+    const double count = std::ceil(cap_solid_angle(check_radius) / (spacing * spacing));
+    if (count > kMaxRefineDirections) return;
+    const std::vector<Vec3> cap = fibonacci_cap(axis, objective_radius, int(std::ceil(cap_solid_angle(objective_radius) / (spacing * spacing))), 0.0);
+    const std::vector<Vec3> check = fibonacci_cap(axis, check_radius, int(count), 0.5);
     const size_t D = cap.size();
-    if (D == 0) return;
+    if (D == 0 || check.empty()) return;
     DirectionSet directions;
     for (const Vec3& d : cap) directions.add(d);
 
@@ -284,6 +295,13 @@ void LobeRefiner::refine(std::span<const WeightedNormal> normals, std::vector<Vm
         levenberg_marquardt(objective, escape);
         if (escape.cost < best.cost) best = std::move(escape);
     }
+
+    // Kept only if closer on the independent, wider set too.
+    std::vector<float> check_reference(check.size()), before(check.size()), after(check.size());
+    reference_effective_brdf(normals, brdf_, check, check_reference);
+    mixture_effective_brdf(lobes, brdf_, check, before);
+    mixture_effective_brdf(best.lobes, brdf_, check, after);
+    if (!(squared_distance(after, check_reference) < squared_distance(before, check_reference))) return;
     lobes = std::move(best.lobes);
 
     std::erase_if(lobes, [](const VmfLobe& l) { return !(l.alpha >= kNegligibleLobeWeight); });

@@ -18,10 +18,20 @@ namespace ndfbake {
 // 32 and 128, levels 2–6): the error falls by nine tenths of what 40 steps reach within 10.
 inline constexpr int kRefineIterations = 10;
 
-// Directions within this many BRDF widths (BaseBrdf::angular_width) of the texel's normals and
-// lobes make up the objective: beyond, the reference and every convolved lobe are below 1% of
-// their peak, and a sharp BRDF's dense direction set shrinks to the cap the texel covers.
+// A texel's objective is its effective BRDF on directions within this many base-BRDF widths
+// (BaseBrdf::angular_width) of its normals and lobes, where the reference lives (beyond, it is
+// under 1% of its peak). The check that a refined fit is kept by (see refine) reaches this many
+// lobe widths, √(w² + 1/κ_min) with the broadest starting lobe, so that lobe mass spread past the
+// objective's cap counts there.
 inline constexpr float kCapMarginWidths = 4.0f;
+// ... spaced at this fraction of the base BRDF's angular width. Measured, mean error over levels
+// 1+ of a 1024² fBm map at GGX roughness 0.3: spacing 0.5 (the error measure's own) and 0.7 give
+// the same error, 1.0 loses a third of the gain at level 2 (GGX's peak is narrower than its α).
+inline constexpr float kRefineSpacingWidths = 0.7f;
+// A texel whose objective would need more directions than this (a BRDF far sharper than the
+// spread of its normals) keeps EM's fit: the cost grows with the count, and a coarser set would
+// let the lobes fit the gaps between directions.
+inline constexpr int kMaxRefineDirections = 8192;
 
 // The refinement matches the effective BRDF of at most this many of a texel's fine normals
 // (subsample_footprint). A sharp BRDF resolves the NDF's fine structure, so a thin subsample
@@ -33,26 +43,20 @@ inline constexpr int kRefineSampleCap = 4096;
 // A refined lobe lighter than this carries nothing a shader would show and is dropped.
 inline constexpr float kNegligibleLobeWeight = 1e-4f;
 
-// The objective's directions are a Fibonacci hemisphere of this fraction of the error measure's
-// count (error_direction_count), at least kMinErrorDirections. Measured, mean error over levels
-// 1+ of a 1024² fBm map at GGX roughness 0.3 (all directions 0.2021): half 0.2021 in 0.6 of the
-// time, a quarter 0.2061 (level 2: 0.099 against 0.074; GGX's peak is narrower than its α).
-inline constexpr int kRefineDirectionFraction = 2;
-
 class LobeRefiner {
 public:
     explicit LobeRefiner(const BaseBrdf& brdf);
 
     // Moves `lobes` (every α > 0, Σα = 1) towards the least relative L2 distance between their
-    // convolved mixture (what the shader computes) and the normals' exact effective BRDF. Every
-    // step it keeps lowers that distance on the directions it uses (the lobes it then drops, under
-    // kNegligibleLobeWeight, add at most their weight back); κ stays in [kKappaMin, kKappaMax],
-    // Σα = 1.
+    // convolved mixture (what the shader computes) and the normals' exact effective BRDF. The
+    // result is kept only if it is also closer on a second, interleaved set of directions over the
+    // wider cap of the lobes' own width (so a lobe cannot gain by fitting between directions or
+    // by spreading outside the objective's cap); otherwise `lobes` stay as they were. κ stays in
+    // [kKappaMin, kKappaMax], Σα = 1.
     void refine(std::span<const WeightedNormal> normals, std::vector<VmfLobe>& lobes) const;
 
 private:
     BaseBrdf brdf_;
-    std::vector<Vec3> directions_;  // each texel uses those near its normals
 };
 
 }  // namespace ndfbake

@@ -110,7 +110,7 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
         // EM seeds from the children's lobes only where a texel has more samples than lobes.
         const bool seeded = largest_footprint(map.width, map.height, l) > uint64_t(slots);
         parallel_rows(level.size.height, settings.threads, [&](int y) {
-            std::vector<WeightedNormal> samples, scored;
+            std::vector<WeightedNormal> samples, scored, refined_normals;
             std::vector<VmfLobe> children, child(static_cast<size_t>(slots));
             std::optional<BinAccumulator> binner;
             if (binned) binner.emplace();
@@ -135,13 +135,18 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
                     gather_footprint(map, l, x, y, settings.wrap, samples);
                     if (scoring) scored = samples;
                 }
-                if (scoring) subsample_footprint(scored, refiner ? kRefineSampleCap : settings.budget_sample_cap);
+                // The refinement sees more of the footprint than the budget (kRefineSampleCap).
+                if (refiner) {
+                    refined_normals = scored;
+                    subsample_footprint(refined_normals, kRefineSampleCap);
+                }
+                if (budgeted) subsample_footprint(scored, settings.budget_sample_cap);
                 std::optional<TexelErrorMeter> meter;
                 if (budgeted) meter.emplace(scored, settings.brdf, budget_directions);
                 TexelFit fit = fit_texel(samples, children, fit_settings, meter ? &*meter : nullptr);
                 // A texel of no more fine normals than lobes already holds them exactly.
-                if (refiner && scored.size() > size_t(slots)) {
-                    refiner->refine(scored, fit.lobes);
+                if (refiner && refined_normals.size() > size_t(slots)) {
+                    refiner->refine(refined_normals, fit.lobes);
                     if (meter) fit.error = meter->error(fit.lobes);
                 }
                 store_texel(level, slots, x, y, std::move(fit.lobes), fit.error);
