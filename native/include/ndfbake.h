@@ -116,7 +116,7 @@ typedef struct ndfb_fit_options {
     /* Non-zero: after EM, move every texel's lobes to where their convolved mixture is closest to
        the exact effective BRDF of `brdf` (Levenberg-Marquardt on the relative L2 error; see
        README "Refining for the BRDF"). Lower error for that BRDF (a fifth less on a 1024² fBm map
-       at GGX roughness 0.3) at about 40x the fitting time; default 0. */
+       at GGX roughness 0.3) at about 60x the fitting time; default 0. */
     int32_t refine;
 } ndfb_fit_options;
 

@@ -49,7 +49,7 @@ bake options:
   --starts N           2 (default): EM from the finer level's lobes and from the farthest
                        samples, keeping the likelier; 1: from the finer level's lobes (Han 7.1)
   --refine             after EM, refine every texel's lobes against the effective BRDF of
-                       --brdf (lower error for that BRDF; about 40x the fitting time)
+                       --brdf (lower error for that BRDF; about 60x the fitting time)
   --no-align           fit texels independently (no lobe alignment across texels and levels)
   --threads N          worker threads (default: all cores)
   --quiet              no progress output
