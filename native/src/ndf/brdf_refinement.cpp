@@ -30,6 +30,9 @@ constexpr double kDampingDown = 0.3, kDampingUp = 10.0;
 // A texel whose relative error is under this after the first search is left there: measured on
 // the synthetic patterns, the escape move gains nothing below it.
 constexpr double kEscapeMinError = 0.02;
+// The refined fit must beat the starting one on the check set by this fraction of its squared
+// distance: the check set is a sample of the error too, and a tie is noise.
+constexpr double kCheckMargin = 1e-3;
 // See damped_solve.
 constexpr double kMinRelativeDamping = 1e-9;
 // A step that lowers the squared distance by less than this fraction ends the search.
@@ -258,19 +261,14 @@ void LobeRefiner::refine(std::span<const WeightedNormal> normals, std::vector<Vm
     for (const VmfLobe& l : lobes) cos_spread = std::min(cos_spread, dot(axis, l.mu));
     const double spread = std::acos(std::clamp(double(cos_spread), -1.0, 1.0));
     const double width = brdf_.angular_width();
-    float min_kappa = kKappaMax;
-    for (const VmfLobe& l : lobes) min_kappa = std::min(min_kappa, l.kappa);
-    const double lobe_width = std::sqrt(width * width + 1.0 / min_kappa);
     // A broad BRDF (Lambert, rough GGX) still gets at least the error measure's least density.
     const double spacing = std::min(kRefineSpacingWidths * width, std::sqrt(2.0 * std::numbers::pi / kMinErrorDirections));
+    const auto direction_count = [&](double radius) { return std::ceil(cap_solid_angle(radius) / (spacing * spacing)); };
     const double objective_radius = spread + kCapMarginWidths * width;
-    const double check_radius = spread + kCapMarginWidths * lobe_width;
-    const double count = std::ceil(cap_solid_angle(check_radius) / (spacing * spacing));
-    if (count > kMaxRefineDirections) return;
-    const std::vector<Vec3> cap = fibonacci_cap(axis, objective_radius, int(std::ceil(cap_solid_angle(objective_radius) / (spacing * spacing))), 0.0);
-    const std::vector<Vec3> check = fibonacci_cap(axis, check_radius, int(count), 0.5);
+    if (direction_count(objective_radius) > kMaxRefineDirections) return;
+    const std::vector<Vec3> cap = fibonacci_cap(axis, objective_radius, int(direction_count(objective_radius)), 0.0);
     const size_t D = cap.size();
-    if (D == 0 || check.empty()) return;
+    if (D == 0) return;
     DirectionSet directions;
     for (const Vec3& d : cap) directions.add(d);
 
@@ -296,18 +294,28 @@ void LobeRefiner::refine(std::span<const WeightedNormal> normals, std::vector<Vm
         if (escape.cost < best.cost) best = std::move(escape);
     }
 
-    // Kept only if closer on the independent, wider set too.
+    std::erase_if(best.lobes, [](const VmfLobe& l) { return !(l.alpha >= kNegligibleLobeWeight); });
+    float total = 0.0f;
+    for (const VmfLobe& l : best.lobes) total += l.alpha;
+    for (VmfLobe& l : best.lobes) l.alpha /= total;
+
+    // Kept only if clearly closer on the independent set too, over a cap as wide as the broadest
+    // lobe, before or after, reaches.
+    float min_kappa = kKappaMax;
+    for (const VmfLobe& l : lobes) min_kappa = std::min(min_kappa, l.kappa);
+    for (const VmfLobe& l : best.lobes) min_kappa = std::min(min_kappa, l.kappa);
+    for (const VmfLobe& l : best.lobes) cos_spread = std::min(cos_spread, dot(axis, l.mu));
+    const double check_radius = std::acos(std::clamp(double(cos_spread), -1.0, 1.0)) +
+                                kCapMarginWidths * std::sqrt(width * width + 1.0 / min_kappa);
+    if (direction_count(check_radius) > kMaxRefineDirections) return;
+    const std::vector<Vec3> check = fibonacci_cap(axis, check_radius, int(direction_count(check_radius)), 0.5);
+    if (check.empty()) return;
     std::vector<float> check_reference(check.size()), before(check.size()), after(check.size());
     reference_effective_brdf(normals, brdf_, check, check_reference);
     mixture_effective_brdf(lobes, brdf_, check, before);
     mixture_effective_brdf(best.lobes, brdf_, check, after);
-    if (!(squared_distance(after, check_reference) < squared_distance(before, check_reference))) return;
-    lobes = std::move(best.lobes);
-
-    std::erase_if(lobes, [](const VmfLobe& l) { return !(l.alpha >= kNegligibleLobeWeight); });
-    float total = 0.0f;
-    for (const VmfLobe& l : lobes) total += l.alpha;
-    for (VmfLobe& l : lobes) l.alpha /= total;
+    if (squared_distance(after, check_reference) < (1.0 - kCheckMargin) * squared_distance(before, check_reference))
+        lobes = std::move(best.lobes);
 }
 
 }  // namespace ndfbake
