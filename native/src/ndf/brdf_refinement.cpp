@@ -27,8 +27,9 @@ constexpr float kMaxLogKappaStep = 1.0f;
 // Levenberg-Marquardt damping: the first λ, its bounds, and how it moves on success and failure.
 constexpr double kInitialDamping = 1e-2, kMinDamping = 1e-12, kMaxDamping = 1e8;
 constexpr double kDampingDown = 0.3, kDampingUp = 10.0;
-// A texel whose relative error is under this after the first search is left there: measured on
-// the synthetic patterns, the escape move gains nothing below it.
+// A texel whose relative error is under this after the first search is left there. Measured on
+// the six synthetic patterns at Blinn-Phong 128: FitAccuracy's figures did not move, and the
+// V-groove's refined build (its texels near-exact) went from 16 s to 2 s.
 constexpr double kEscapeMinError = 0.02;
 // The refined fit must beat the starting one on the check set by this fraction of its squared
 // distance: the check set is a sample of the error too, and a tie is noise.

@@ -14,8 +14,9 @@
 
 namespace ndfbake {
 
-// Levenberg-Marquardt steps per texel at most. Measured on the six synthetic patterns (Blinn-Phong
-// 32 and 128, levels 2–6): the error falls by nine tenths of what 40 steps reach within 10.
+// Levenberg-Marquardt steps per texel (per start) at most. Measured on the six synthetic patterns
+// at Blinn-Phong 128: 25 steps instead of 10 moved the level-4 mean from 0.201 to 0.200 of
+// Toksvig's error, at twice the time.
 inline constexpr int kRefineIterations = 10;
 
 // A texel's objective is its effective BRDF on directions within this many base-BRDF widths
