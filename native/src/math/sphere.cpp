@@ -20,10 +20,15 @@ std::vector<Vec3> fibonacci_hemisphere(int count)
     return directions;
 }
 
-std::vector<Vec3> fibonacci_cap(const Vec3& axis, double radius, int count, double phase)
+OrthonormalFrame orthonormal_frame(const Vec3& axis)
 {
     const Vec3 t = normalize_or(cross(std::abs(axis.x) < 0.9f ? Vec3{1, 0, 0} : Vec3{0, 1, 0}, axis), {1, 0, 0});
-    const Vec3 b = cross(axis, t);
+    return {t, cross(axis, t)};
+}
+
+std::vector<Vec3> fibonacci_cap(const Vec3& axis, double radius, int count, double phase)
+{
+    const auto [t, b] = orthonormal_frame(axis);
     const double golden_angle = std::numbers::pi * (3.0 - std::sqrt(5.0));
     const double one_minus_cos = 1.0 - std::cos(std::min(radius, std::numbers::pi));
     std::vector<Vec3> directions;

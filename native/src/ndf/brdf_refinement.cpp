@@ -39,16 +39,6 @@ constexpr double kMinRelativeDamping = 1e-9;
 // A step that lowers the squared distance by less than this fraction ends the search.
 constexpr double kRefineConvergence = 1e-3;
 
-struct TangentFrame {
-    Vec3 t, b;
-};
-
-TangentFrame frame_of(const Vec3& mu)
-{
-    const Vec3 t = normalize_or(cross(std::abs(mu.x) < 0.9f ? Vec3{1, 0, 0} : Vec3{0, 1, 0}, mu), {1, 0, 0});
-    return {t, cross(mu, t)};
-}
-
 // The parameters a step changes, around the current lobes.
 struct LobeStep {
     float logit = 0.0f, u = 0.0f, v = 0.0f, log_kappa = 0.0f;
@@ -68,7 +58,7 @@ std::vector<VmfLobe> stepped(std::span<const VmfLobe> lobes, std::span<const Lob
     for (size_t j = 0; j < out.size(); ++j) {
         VmfLobe& lobe = out[j];
         lobe.alpha = std::exp(logit[j] - max_logit) / total;
-        const TangentFrame f = frame_of(lobe.mu);
+        const OrthonormalFrame f = orthonormal_frame(lobe.mu);
         lobe.mu = normalize_or(lobe.mu + step[j].u * f.t + step[j].v * f.b, lobe.mu);
         const float dk = std::clamp(step[j].log_kappa, -kMaxLogKappaStep, kMaxLogKappaStep);
         lobe.kappa = std::clamp(lobe.kappa * std::exp(dk), kKappaMin, kKappaMax);
@@ -202,7 +192,7 @@ void levenberg_marquardt(const Objective& objective, FitState& state)
             const float dlog_kappa = lobe.kappa * std::exp(kLogKappaDifference) <= kKappaMax ? kLogKappaDifference
                                                                                             : -kLogKappaDifference;
             objective.brdf.convolved(lobe.kappa * std::exp(dlog_kappa)).eval_many(c, wider, {});
-            const TangentFrame frame = frame_of(lobe.mu);
+            const OrthonormalFrame frame = orthonormal_frame(lobe.mu);
             const std::span<float> logit = column(int(j) * kLobeParameters), u = column(int(j) * kLobeParameters + 1),
                                    v = column(int(j) * kLobeParameters + 2), log_kappa = column(int(j) * kLobeParameters + 3);
             const float a = lobe.alpha;
