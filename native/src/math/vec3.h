@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cmath>
+#include <span>
 
 namespace ndfbake {
 
@@ -35,6 +36,12 @@ inline Vec3 normalize_or(const Vec3& v, const Vec3& fallback)
 {
     const float len = length(v);
     return (len > 0.0f && std::isfinite(len)) ? v / len : fallback;
+}
+
+// out[i] = vectors[i] · v, for every vector.
+inline void dot_each(std::span<const Vec3> vectors, const Vec3& v, std::span<float> out)
+{
+    for (size_t i = 0; i < vectors.size(); ++i) out[i] = dot(vectors[i], v);
 }
 
 // Double-precision accumulator: sums of millions of unit vectors lose digits in float.

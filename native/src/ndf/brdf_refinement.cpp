@@ -66,6 +66,13 @@ std::vector<VmfLobe> stepped(std::span<const VmfLobe> lobes, std::span<const Lob
     return out;
 }
 
+double squared_norm(std::span<const float> a)
+{
+    double sum = 0.0;
+    for (float v : a) sum += double(v) * v;
+    return sum;
+}
+
 double squared_distance(std::span<const float> a, std::span<const float> b)
 {
     double sum = 0.0;
@@ -106,22 +113,6 @@ bool damped_solve(const double* A, const double* g, int n, double lambda, double
     return true;
 }
 
-// The directions of one texel's objective in structure-of-arrays form, for vectorized loops.
-struct DirectionSet {
-    std::vector<float> x, y, z;
-    size_t size() const { return x.size(); }
-    void add(const Vec3& d) { x.push_back(d.x), y.push_back(d.y), z.push_back(d.z); }
-    // out[i] = directions[i] · v
-    void dot_with(const Vec3& v, std::span<float> out) const
-    {
-        const size_t n = size();
-        const float *px = x.data(), *py = y.data(), *pz = z.data();
-        float* o = out.data();
-#pragma omp simd
-        for (size_t i = 0; i < n; ++i) o[i] = px[i] * v.x + py[i] * v.y + pz[i] * v.z;
-    }
-};
-
 // Σ a_i b_i over independent partial sums: one vector accumulator would wait on its own additions
 // (the normal equations are a few hundred of these per step).
 float dot_product(std::span<const float> a, std::span<const float> b)
@@ -143,7 +134,7 @@ float dot_product(std::span<const float> a, std::span<const float> b)
 // reference effective BRDF over the texel's directions.
 struct Objective {
     const BaseBrdf& brdf;
-    const DirectionSet& directions;
+    std::span<const Vec3> directions;
     std::span<const float> reference;
 };
 
@@ -156,14 +147,8 @@ struct FitState {
 // Σ_j α_j G_j(d·μ_j) (eq. 20–21) on every direction, and its distance to the reference.
 FitState evaluate(const Objective& objective, std::vector<VmfLobe> lobes)
 {
-    const size_t D = objective.directions.size();
-    FitState state{std::move(lobes), std::vector<float>(D, 0.0f), 0.0};
-    std::vector<float> c(D), g(D);
-    for (const VmfLobe& lobe : state.lobes) {
-        objective.directions.dot_with(lobe.mu, c);
-        objective.brdf.convolved(lobe.kappa).eval_many(c, g, {});
-        for (size_t d = 0; d < D; ++d) state.fit[d] += lobe.alpha * g[d];
-    }
+    FitState state{std::move(lobes), std::vector<float>(objective.directions.size()), 0.0};
+    mixture_effective_brdf(state.lobes, objective.brdf, objective.directions, state.fit);
     state.cost = squared_distance(state.fit, objective.reference);
     return state;
 }
@@ -186,7 +171,7 @@ void levenberg_marquardt(const Objective& objective, FitState& state)
         for (size_t d = 0; d < D; ++d) residual[d] = state.fit[d] - objective.reference[d];
         for (size_t j = 0; j < J; ++j) {
             const VmfLobe& lobe = state.lobes[j];
-            objective.directions.dot_with(lobe.mu, c);
+            dot_each(objective.directions, lobe.mu, c);
             objective.brdf.convolved(lobe.kappa).eval_many(c, g, slope);
             // One-sided difference inward from the κ bounds.
             const float dlog_kappa = lobe.kappa * std::exp(kLogKappaDifference) <= kKappaMax ? kLogKappaDifference
@@ -200,9 +185,9 @@ void levenberg_marquardt(const Objective& objective, FitState& state)
                 logit[d] = a * (g[d] - state.fit[d]);  // ∂/∂logit_j of a softmax weight
                 log_kappa[d] = a * (wider[d] - g[d]) / dlog_kappa;
             }
-            objective.directions.dot_with(frame.t, along);
+            dot_each(objective.directions, frame.t, along);
             for (size_t d = 0; d < D; ++d) u[d] = a * slope[d] * along[d];
-            objective.directions.dot_with(frame.b, along);
+            dot_each(objective.directions, frame.b, along);
             for (size_t d = 0; d < D; ++d) v[d] = a * slope[d] * along[d];
         }
         for (int i = 0; i < P; ++i) {
@@ -260,18 +245,16 @@ void LobeRefiner::refine(std::span<const WeightedNormal> normals, std::vector<Vm
     const std::vector<Vec3> cap = fibonacci_cap(axis, objective_radius, int(direction_count(objective_radius)), 0.0);
     const size_t D = cap.size();
     if (D == 0) return;
-    DirectionSet directions;
-    for (const Vec3& d : cap) directions.add(d);
 
     std::vector<float> reference(D);
     reference_effective_brdf(normals, brdf_, cap, reference);
-    const Objective objective{brdf_, directions, reference};
+    const Objective objective{brdf_, cap, reference};
     FitState best = evaluate(objective, lobes);
     levenberg_marquardt(objective, best);
 
     // One escape from the local minimum: the lightest lobe moves to where the fit falls
     // furthest below the reference, and the search runs again.
-    const double reference_norm2 = squared_distance(reference, std::vector<float>(D, 0.0f));
+    const double reference_norm2 = squared_norm(reference);
     if (J > 1 && best.cost > kEscapeMinError * kEscapeMinError * reference_norm2) {
         size_t lightest = 0, hungriest = 0;
         for (size_t j = 1; j < J; ++j)

@@ -39,11 +39,12 @@ void mixture_effective_brdf(std::span<const VmfLobe> lobes, const BaseBrdf& brdf
                             std::span<const Vec3> directions, std::span<float> out)
 {
     std::fill(out.begin(), out.end(), 0.0f);
+    std::vector<float> cosines(directions.size()), values(directions.size());
     for (const VmfLobe& lobe : lobes) {
         if (lobe.alpha <= 0.0f) continue;
-        const ConvolvedLobe shape = brdf.convolved(lobe.kappa);
-        for (size_t d = 0; d < directions.size(); ++d)
-            out[d] += lobe.alpha * shape.eval(dot(directions[d], lobe.mu));
+        dot_each(directions, lobe.mu, cosines);
+        brdf.convolved(lobe.kappa).eval_many(cosines, values, {});
+        for (size_t d = 0; d < directions.size(); ++d) out[d] += lobe.alpha * values[d];
     }
 }
 
