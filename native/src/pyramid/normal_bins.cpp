@@ -1,6 +1,7 @@
 #include "pyramid/normal_bins.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace ndfbake {
@@ -29,7 +30,7 @@ BinAccumulator::BinAccumulator() : weight_(kNormalBinCount, 0.0f), sum_(kNormalB
 
 void BinAccumulator::add(uint32_t index, float weight, const Vec3& sum)
 {
-    if (weight_[index] == 0.0f) touched_.push_back(index);
+    occupied_[index / 64] |= uint64_t(1) << (index % 64);
     weight_[index] += weight;
     sum_[index] += sum;
 }
@@ -46,14 +47,16 @@ void BinAccumulator::add(std::span<const NormalBin> bins)
 
 std::span<const NormalBin> BinAccumulator::finish()
 {
-    std::sort(touched_.begin(), touched_.end());
     bins_.clear();
-    for (uint32_t index : touched_) {
-        bins_.push_back({index, weight_[index], sum_[index]});
-        weight_[index] = 0.0f;
-        sum_[index] = {};
+    for (size_t word = 0; word < occupied_.size(); ++word) {
+        for (uint64_t bits = occupied_[word]; bits != 0; bits &= bits - 1) {
+            const uint32_t index = uint32_t(64 * word) + uint32_t(std::countr_zero(bits));
+            if (weight_[index] > 0.0f) bins_.push_back({index, weight_[index], sum_[index]});
+            weight_[index] = 0.0f;
+            sum_[index] = {};
+        }
+        occupied_[word] = 0;
     }
-    touched_.clear();
     return bins_;
 }
 

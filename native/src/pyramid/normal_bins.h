@@ -2,6 +2,7 @@
 // binned by direction, each bin keeping how many normals it holds and their vector sum.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -40,7 +41,9 @@ private:
     void add(uint32_t index, float weight, const Vec3& sum);
     std::vector<float> weight_;
     std::vector<Vec3> sum_;
-    std::vector<uint32_t> touched_;
+    // Which bins hold normals, one bit each: finish() lists them in index order by scanning the
+    // words, which costs less than sorting the touched indices (a third of the binning's time).
+    std::array<uint64_t, kNormalBinCount / 64> occupied_{};
     std::vector<NormalBin> bins_;
 };
 
