@@ -45,9 +45,10 @@ bake options:
                        below) or per-level (every level from all its fine normals: Han's
                        reference, 2-3x slower)
   --iterations N       EM iterations per texel at most (default 10; the hierarchical fit runs
-                       at most 5 on binned levels)
-  --starts N           2 (default): EM from the finer level's lobes and from the farthest
-                       samples, keeping the likelier; 1: from the finer level's lobes (Han 7.1)
+                       at most 3 on footprints of up to 64 normals and on binned levels)
+  --starts N           1 (default): EM from the finer level's lobes (Han 7.1; merged, in
+                       the hierarchical fit); 2: also from the farthest samples, keeping the
+                       likelier
   --refine             after EM, refine every texel's lobes against the effective BRDF of
                        --brdf (lower error for that BRDF; about 60x the fitting time)
   --no-align           fit texels independently (no lobe alignment across texels and levels)

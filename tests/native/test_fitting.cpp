@@ -7,6 +7,7 @@
 #include <random>
 
 #include "bake/level_stats.h"
+#include "error.h"
 #include "math/sphere.h"
 #include "ndf/moments.h"
 #include "ndf/texel_fit.h"
@@ -120,6 +121,67 @@ TEST(SphericalEm, DeadLobesArePrunedNotLeftAsNaN)
     for (const VmfLobe& l : fit.lobes) total += l.alpha;
     EXPECT_NEAR(total, 1.0f, 1e-5f);
     expect_valid_lobes(fit.lobes);
+}
+
+// Mixture reduction against its definition: merging lobes fitted to two sets of normals gives the
+// single lobe of the union of the normals (up to Banerjee's κ approximation, applied once more).
+TEST(MixtureReduction, MergedLobeIsTheSingleLobeOfTheUnionOfTheLobesNormals)
+{
+    std::mt19937 rng(11);
+    const Vec3 a = normalize_or({0.2f, 0.0f, 1.0f}, {}), b = normalize_or({-0.3f, 0.25f, 1.0f}, {});
+    std::vector<Vec3> from_a, from_b;
+    for (int i = 0; i < 20000; ++i) from_a.push_back(sample_vmf(rng, a, 60.0f));
+    for (int i = 0; i < 10000; ++i) from_b.push_back(sample_vmf(rng, b, 150.0f));
+    VmfLobe lobe_a = single_vmf_lobe(unit_samples(from_a)), lobe_b = single_vmf_lobe(unit_samples(from_b));
+    lobe_a.alpha = 2.0f / 3.0f;
+    lobe_b.alpha = 1.0f / 3.0f;
+    std::vector<Vec3> both = from_a;
+    both.insert(both.end(), from_b.begin(), from_b.end());
+    const VmfLobe truth = single_vmf_lobe(unit_samples(both));
+
+    const std::vector<VmfLobe> merged = merge_nearest_lobes(std::vector<VmfLobe>{lobe_a, lobe_b}, 1);
+    ASSERT_EQ(merged.size(), 1u);
+    EXPECT_FLOAT_EQ(merged[0].alpha, 1.0f);
+    EXPECT_GT(dot(merged[0].mu, truth.mu), std::cos(0.2f * 3.14159f / 180.0f));
+    EXPECT_NEAR(merged[0].kappa / truth.kappa, 1.0f, 0.03f);
+    EXPECT_LT(merged[0].kappa, lobe_a.kappa);  // the union is broader than either part
+}
+
+TEST(MixtureReduction, MergesTheNearestPairAndReturnsTheOthersAsTheyCame)
+{
+    const Vec3 z{0, 0, 1}, tilted = normalize_or({std::sin(0.09f), 0.0f, std::cos(0.09f)}, {});
+    const VmfLobe far{0.2f, normalize_or({0.0f, 0.9f, 0.5f}, {}), 50.0f};
+    const std::vector<VmfLobe> lobes{{0.15f, z, 100.0f}, far, {0.15f, tilted, 100.0f}};
+    // Only positive weights count, and they are renormalized: 0.5 in all, doubled.
+    const std::vector<VmfLobe> kept = merge_nearest_lobes(lobes, 3);
+    ASSERT_EQ(kept.size(), 3u);
+    for (size_t i = 0; i < 3; ++i) {
+        EXPECT_FLOAT_EQ(kept[i].alpha, 2.0f * lobes[i].alpha);
+        EXPECT_EQ(kept[i].kappa, lobes[i].kappa);
+    }
+
+    const std::vector<VmfLobe> merged = merge_nearest_lobes(lobes, 2);
+    ASSERT_EQ(merged.size(), 2u);
+    const auto& untouched = merged[0].alpha > 0.5f ? merged[1] : merged[0];
+    const auto& pair = merged[0].alpha > 0.5f ? merged[0] : merged[1];
+    EXPECT_FLOAT_EQ(untouched.alpha, 0.4f);
+    EXPECT_EQ(untouched.kappa, far.kappa);
+    EXPECT_EQ(untouched.mu.y, far.mu.y);
+    EXPECT_FLOAT_EQ(pair.alpha, 0.6f);
+    EXPECT_GT(dot(pair.mu, normalize_or(z + tilted, z)), std::cos(0.1f * 3.14159f / 180.0f));
+    EXPECT_LT(pair.kappa, 100.0f);  // two lobes 5° apart make a broader one
+    EXPECT_GT(pair.kappa, 50.0f);
+}
+
+TEST(MixtureReduction, AntipodalLobesMergeIntoTheBroadestLobeAndTooManyAreRefused)
+{
+    const std::vector<VmfLobe> merged =
+        merge_nearest_lobes(std::vector<VmfLobe>{{0.5f, {0, 0, 1}, kKappaMax}, {0.5f, {0, 0, -1}, kKappaMax}}, 1);
+    ASSERT_EQ(merged.size(), 1u);
+    expect_valid_lobes(merged);
+    EXPECT_LT(merged[0].kappa, 0.01f);  // the two cancel: no preferred direction is left
+    const std::vector<VmfLobe> too_many(4 * kMaxLobes + 1, VmfLobe{0.1f, {0, 0, 1}, 10.0f});
+    EXPECT_THROW(merge_nearest_lobes(too_many, 4), Error);
 }
 
 TEST(LobeBudget, AddsLobesOnlyWhileTheErrorIsAboveTolerance)
