@@ -65,6 +65,7 @@ std::vector<VmfLobe> fit_from_seeds(std::span<const WeightedNormal> samples, std
 std::vector<VmfLobe> lobes_of_samples(std::span<const WeightedNormal> samples)
 {
     std::vector<VmfLobe> lobes;
+    lobes.reserve(samples.size());
     double total = 0.0;
     for (const WeightedNormal& s : samples) total += s.weight;
     for (const WeightedNormal& s : samples) {

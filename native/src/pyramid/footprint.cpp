@@ -24,7 +24,9 @@ void axis_footprint(int extent, int level, int i, WrapMode wrap, std::vector<Axi
         return;
     }
     if (span < extent) {
-        for (int64_t k = 0; k < span; ++k) out.push_back({int((start + k) % extent), 1});
+        // Only a footprint that runs past the edge wraps (and pays a division per index).
+        const bool wraps = start + span > extent;
+        for (int64_t k = 0; k < span; ++k) out.push_back({int(wraps ? (start + k) % extent : start + k), 1});
         return;
     }
     // Every fine index repeats span / extent times, and span mod extent of them once more,
