@@ -24,11 +24,22 @@ namespace {
 // Fine normals per texel in the exact reference: a golden-ratio subsample beyond this (the same
 // for every method, so comparisons are unaffected).
 constexpr int kBenchSampleCap = 1024;
-// Builds timed per method and map (the fastest counts), while they take under this many seconds
-// in all. Three were too few on a 2-core machine: bake-default and vmf-4, one method under two
-// names, came out 0.27 s and 0.22 s in one run.
+// Builds timed per method and map (the fastest counts): kTimedBuilds, while they take under
+// kRepeatBuildsUnder seconds in all, and builds that short more, up to kMaxTimedBuilds, until they
+// have taken kShortBuildsFor seconds. Three were too few on a 2-core machine: bake-default and
+// vmf-4, one method under two names, came out 0.27 s and 0.22 s in one run; seven still left the
+// 10-ms builds of a 256² pattern 20% apart (0.074 s and 0.061 s over the six patterns).
 constexpr int kTimedBuilds = 7;
 constexpr double kRepeatBuildsUnder = 3.0;
+constexpr int kMaxTimedBuilds = 64;
+constexpr double kShortBuildsFor = 0.3;
+
+bool time_another_build(int builds_done, double seconds_spent)
+{
+    if (builds_done == 0) return true;
+    if (seconds_spent >= kRepeatBuildsUnder) return false;
+    return builds_done < kTimedBuilds || (builds_done < kMaxTimedBuilds && seconds_spent < kShortBuildsFor);
+}
 // Heat maps show relative error on [0, kHeatmapMaxError]; larger errors saturate.
 constexpr float kHeatmapMaxError = 0.5f;
 
@@ -209,7 +220,7 @@ std::vector<BenchRow> run_benchmark(const BenchSettings& settings, const std::st
                 if (b == 0 || fitted_for_brdf(method)) {
                     seconds = std::numeric_limits<double>::infinity();
                     double spent = 0.0;
-                    for (int run = 0; run < kTimedBuilds && (run == 0 || spent < kRepeatBuildsUnder); ++run) {
+                    for (int run = 0; time_another_build(run, spent); ++run) {
                         const auto start = std::chrono::steady_clock::now();
                         pyramid = build_method(method, map, settings.brdfs[b], settings.threads);
                         const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
