@@ -43,7 +43,7 @@ bake options:
                        (for renderers without MIP levels; layout in report.json)
   --method M           hierarchical (default: every level from the binned normals of the level
                        below) or per-level (every level from all its fine normals: Han's
-                       reference, 2-3x slower)
+                       reference, about 3x slower)
   --iterations N       EM iterations per texel at most (default 10; the hierarchical fit runs
                        at most 3 on footprints of up to 64 normals and on binned levels)
   --starts N           1 (default): EM from the finer level's lobes (Han 7.1; merged, in

@@ -98,7 +98,9 @@ TEST_F(BakeApi, StartsAreOneOrTwoAndTheDefaultIsTheHierarchicalFitWithOne)
     EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("bad").c_str(), &decode_, &fit_, &write_), NDFB_ERROR_INVALID_ARGUMENT);
     EXPECT_NE(std::string(ndfb_last_error(ctx_)).find("starts"), std::string::npos);
     EXPECT_FALSE(std::filesystem::exists(path("bad")));
-    fit_.starts = 2;
+    fit_.starts = 2;  // both methods take the second start
+    EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("two-starts").c_str(), &decode_, &fit_, &write_), NDFB_OK)
+        << ndfb_last_error(ctx_);
     fit_.method = NDFB_FIT_PER_LEVEL;
     EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("reference").c_str(), &decode_, &fit_, &write_), NDFB_OK)
         << ndfb_last_error(ctx_);
@@ -128,9 +130,9 @@ TEST_F(BakeApi, RefiningForTheBrdfLowersEveryLevelsErrorAndSaysSo)
     // Level 1 holds each texel's four normals exactly (nothing to refine). Levels 2-4, of 16 texels
     // or more, lose at least a tenth of their error (measured: 0.63-0.70 of EM's); levels 5 and 6
     // are four texels and one, where one texel whose EM fit is already close gains less (0.84 and
-    // 0.96 of EM's error, from the hierarchical fit's merged seeds): lower, by any amount.
+    // 0.96 of EM's error, from the hierarchical fit's merged seeds): at least 2% less.
     for (int level = 2; level < 7; ++level)
-        EXPECT_LT(level_fit_error(refined, level), (level < 5 ? 0.9f : 1.0f) * level_fit_error(em, level))
+        EXPECT_LT(level_fit_error(refined, level), (level < 5 ? 0.9f : 0.98f) * level_fit_error(em, level))
             << "level " << level;
     std::string attribute = "(none)";
     for (const auto& [key, value] : read_image_info(refined + "/level03_lobe0.exr").attributes)

@@ -14,6 +14,14 @@ namespace {
 // Seeds closer than this (1 − cos, about 0.08°) are the same direction.
 constexpr float kDistinctSeedDistance = 1e-6f;
 
+bool has_repeated_direction(std::span<const VmfLobe> lobes)
+{
+    for (size_t i = 0; i < lobes.size(); ++i)
+        for (size_t j = i + 1; j < lobes.size(); ++j)
+            if (1.0f - dot(lobes[i].mu, lobes[j].mu) < kDistinctSeedDistance) return true;
+    return false;
+}
+
 float nearest_seed_distance(const Vec3& n, std::span<const VmfLobe> seeds)
 {
     float nearest = std::numeric_limits<float>::infinity();
@@ -31,9 +39,10 @@ void prune_dead_lobes(std::vector<VmfLobe>& lobes)
 }
 
 // EM from the children's seeds (merged, or the farthest of them: §7.1), and with
-// settings.two_starts also from the fine normals farthest apart, keeping the likelier. Measured on the synthetic patterns, neither start wins everywhere: the
-// children's lobes are steadier across neighbours, the fine normals escape the children's
-// outlier lobes (fbm at level 6: 0.154 against 0.092 relative error for 4 lobes).
+// settings.two_starts also from the fine normals farthest apart, keeping the likelier. Against
+// the farthest children a second start helped (fbm at level 6: 0.154 against 0.092 relative
+// error for 4 lobes: it escapes the children's outlier lobes); against merged children it does
+// not (see TexelFitSettings::two_starts).
 std::vector<VmfLobe> fit_from_seeds(std::span<const WeightedNormal> samples, std::span<const VmfLobe> child_lobes,
                                     int count, const TexelFitSettings& settings)
 {
@@ -46,8 +55,10 @@ std::vector<VmfLobe> fit_from_seeds(std::span<const WeightedNormal> samples, std
         from_children = merge_nearest_lobes(child_lobes, count);
         for (VmfLobe& seed : from_children) seed.kappa = std::min(seed.kappa, kMaxSeedKappa);
     }
-    // Fewer merged lobes than `count` (the children hold fewer): the farthest samples fill in.
-    if (int(from_children.size()) < count) from_children = farthest_point_seeds(child_lobes, samples, count);
+    // Fewer merged lobes than `count`, or two in one direction (the children hold fewer
+    // directions; EM cannot part identical seeds): the distinct ones, and the farthest samples.
+    if (int(from_children.size()) < count || has_repeated_direction(from_children))
+        from_children = farthest_point_seeds(from_children.empty() ? child_lobes : from_children, samples, count);
     const double children_fit = fit_vmf_mixture(samples, from_children, em).mean_log_likelihood;
     if (!settings.two_starts || few_samples) {
         prune_dead_lobes(from_children);

@@ -62,7 +62,8 @@ std::vector<VmfLobe> farthest_point_seeds(std::span<const VmfLobe> candidates,
 
 // Mixture reduction (agglomerative, Ward's rule on the sphere). A lobe stands for its vMF's
 // α-weighted mean resultant, m = α A(κ) μ. Merging two lobes adds their m and fits one vMF to the
-// sum (κ from |m| / α): the moment-matched single lobe of the two lobes' mixture. The pair merged
+// sum (κ from |m| / α by Banerjee's approximation, as EM's M-step does, so a lobe merged with a
+// copy of itself comes back with κ within 5%): the moment-matched single lobe of the mixture. The pair merged
 // next is the one that loses the least resultant length, |m_a| + |m_b| − |m_a + m_b|: the
 // spherical k-means scatter Σ w (1 − μ·n) the merge adds. Merges the α > 0 lobes of `lobes` (at
 // most 4 · kMaxLobes) until `count` remain; α sums to 1.

@@ -17,6 +17,7 @@ namespace ndfbake {
 // than the sharpest lobes (measured on the brushed pattern: 32² bins cost 10% error, 64² none).
 inline constexpr int kNormalBinsPerAxis = 64;
 inline constexpr int kNormalBinCount = kNormalBinsPerAxis * kNormalBinsPerAxis;
+static_assert(kNormalBinCount % 64 == 0, "BinAccumulator keeps one occupancy bit per bin in 64-bit words");
 
 struct NormalBin {
     uint32_t index;   // row-major cell of the hemi-octahedral grid
