@@ -60,7 +60,7 @@ typedef enum ndfb_fit_method {
     NDFB_FIT_PER_LEVEL = 0,    /* every level from all the fine normals it covers (Han §7.1): the
                                   reference the default is measured against */
     NDFB_FIT_HIERARCHICAL = 1  /* every level from the binned normals of the level below (default):
-                                  as accurate, about 3x faster (README, "Speed") */
+                                  as accurate, 2-3x faster (README, "Speed") */
 } ndfb_fit_method;
 typedef enum ndfb_representation {
     NDFB_REPR_VMF_MIXTURE = 0, /* the budgeted vMF mixture (what bake writes) */
@@ -94,8 +94,7 @@ typedef struct ndfb_fit_options {
     ndfb_wrap wrap;
     int32_t align;                /* non-zero: aligned lobes (eq. 23) for hardware filtering, default 1 */
     float alignment_strength;     /* C of eq. 23, default 0 (slots are reordered, lobes not pulled) */
-    uint32_t max_iterations;      /* EM iterations per texel at most, default 10 (hierarchical: at most 3 on footprints of up
-                                     to 64 normals and on binned levels) */
+    uint32_t max_iterations;      /* EM iterations per texel at most, default 10 (hierarchical: at most 5 on binned levels) */
     ndfb_fit_method method;       /* default NDFB_FIT_HIERARCHICAL */
     uint32_t threads;             /* 0: all cores */
     ndfb_progress_fn progress;
@@ -110,15 +109,13 @@ typedef struct ndfb_fit_options {
        to 1x1. A scene whose cameras never see the map smaller than 2^(n-1) texels per pixel needs
        n levels, and the fit of each level costs about as much as any other. */
     uint32_t max_levels;
-    /* EM starts per texel: 1 (default) seeds EM from the finer level's lobes only (the farthest
-       of them, Han §7.1; the hierarchical fit merges them on footprints over 64 normals); 2 also
-       from the farthest-apart samples where a texel has more than 64, keeping the likelier fit
-       (twice the time there; from the hierarchical fit's merged seeds it changed no error
-       measurably on fbm at 1024² and 2048²). */
+    /* EM starts per texel: 1 seeds EM from the finer level's lobes only (Han §7.1); 2 (default)
+       also from the farthest-apart samples where a texel has more than 64, keeping the likelier
+       fit (lower error on wide footprints, where the finer level's lobes trap EM). */
     uint32_t starts;
     /* Non-zero: after EM, move every texel's lobes to where their convolved mixture is closest to
        the exact effective BRDF of `brdf` (Levenberg-Marquardt on the relative L2 error; see
-       README "Refining for the BRDF"). Lower error for that BRDF (15% less on a 1024² fBm map
+       README "Refining for the BRDF"). Lower error for that BRDF (a fifth less on a 1024² fBm map
        at GGX roughness 0.3) at about 60x the fitting time; default 0. */
     int32_t refine;
 } ndfb_fit_options;

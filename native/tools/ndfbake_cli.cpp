@@ -43,12 +43,11 @@ bake options:
                        (for renderers without MIP levels; layout in report.json)
   --method M           hierarchical (default: every level from the binned normals of the level
                        below) or per-level (every level from all its fine normals: Han's
-                       reference, about 3x slower)
+                       reference, 2-3x slower)
   --iterations N       EM iterations per texel at most (default 10; the hierarchical fit runs
-                       at most 3 on footprints of up to 64 normals and on binned levels)
-  --starts N           1 (default): EM from the finer level's lobes (Han 7.1; merged, in
-                       the hierarchical fit); 2: also from the farthest samples, keeping the
-                       likelier
+                       at most 5 on binned levels)
+  --starts N           2 (default): EM from the finer level's lobes and from the farthest
+                       samples, keeping the likelier; 1: from the finer level's lobes (Han 7.1)
   --refine             after EM, refine every texel's lobes against the effective BRDF of
                        --brdf (lower error for that BRDF; about 60x the fitting time)
   --no-align           fit texels independently (no lobe alignment across texels and levels)

@@ -2,14 +2,11 @@
 // exact effective BRDF (Han 2007 eq. 4), never against stored numbers.
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 #include <random>
 
 #include "bake/level_stats.h"
-#include "error.h"
 #include "math/sphere.h"
 #include "ndf/moments.h"
 #include "ndf/texel_fit.h"
@@ -123,132 +120,6 @@ TEST(SphericalEm, DeadLobesArePrunedNotLeftAsNaN)
     for (const VmfLobe& l : fit.lobes) total += l.alpha;
     EXPECT_NEAR(total, 1.0f, 1e-5f);
     expect_valid_lobes(fit.lobes);
-}
-
-// Mixture reduction against its definition: merging lobes fitted to two sets of normals gives the
-// single lobe of the union of the normals (up to Banerjee's κ approximation, applied once more).
-TEST(MixtureReduction, MergedLobeIsTheSingleLobeOfTheUnionOfTheLobesNormals)
-{
-    std::mt19937 rng(11);
-    const Vec3 a = normalize_or({0.2f, 0.0f, 1.0f}, {}), b = normalize_or({-0.3f, 0.25f, 1.0f}, {});
-    std::vector<Vec3> from_a, from_b;
-    for (int i = 0; i < 20000; ++i) from_a.push_back(sample_vmf(rng, a, 60.0f));
-    for (int i = 0; i < 10000; ++i) from_b.push_back(sample_vmf(rng, b, 150.0f));
-    VmfLobe lobe_a = single_vmf_lobe(unit_samples(from_a)), lobe_b = single_vmf_lobe(unit_samples(from_b));
-    lobe_a.alpha = 2.0f / 3.0f;
-    lobe_b.alpha = 1.0f / 3.0f;
-    std::vector<Vec3> both = from_a;
-    both.insert(both.end(), from_b.begin(), from_b.end());
-    const VmfLobe truth = single_vmf_lobe(unit_samples(both));
-
-    const std::vector<VmfLobe> merged = merge_nearest_lobes(std::vector<VmfLobe>{lobe_a, lobe_b}, 1);
-    ASSERT_EQ(merged.size(), 1u);
-    EXPECT_FLOAT_EQ(merged[0].alpha, 1.0f);
-    EXPECT_GT(dot(merged[0].mu, truth.mu), std::cos(0.2f * 3.14159f / 180.0f));
-    EXPECT_NEAR(merged[0].kappa / truth.kappa, 1.0f, 0.03f);
-}
-
-TEST(MixtureReduction, MergesTheNearestPairAndReturnsTheOthersAsTheyCame)
-{
-    const Vec3 z{0, 0, 1}, tilted = normalize_or({std::sin(0.09f), 0.0f, std::cos(0.09f)}, {});
-    const VmfLobe far{0.2f, normalize_or({0.0f, 0.9f, 0.5f}, {}), 50.0f};
-    const std::vector<VmfLobe> lobes{{0.15f, z, 100.0f}, far, {0.15f, tilted, 100.0f}, {0.0f, {1, 0, 0}, 5.0f}};
-    // Only positive weights count, and they are renormalized: 0.5 in all, doubled.
-    const std::vector<VmfLobe> kept = merge_nearest_lobes(lobes, 3);
-    ASSERT_EQ(kept.size(), 3u);
-    for (size_t i = 0; i < 3; ++i) {
-        EXPECT_FLOAT_EQ(kept[i].alpha, 2.0f * lobes[i].alpha);
-        EXPECT_EQ(kept[i].kappa, lobes[i].kappa);
-    }
-
-    const std::vector<VmfLobe> merged = merge_nearest_lobes(lobes, 2);
-    ASSERT_EQ(merged.size(), 2u);
-    const auto& untouched = merged[0].alpha > 0.5f ? merged[1] : merged[0];
-    const auto& pair = merged[0].alpha > 0.5f ? merged[0] : merged[1];
-    EXPECT_FLOAT_EQ(untouched.alpha, 0.4f);
-    EXPECT_EQ(untouched.kappa, far.kappa);
-    EXPECT_EQ(untouched.mu.y, far.mu.y);
-    EXPECT_FLOAT_EQ(pair.alpha, 0.6f);
-    EXPECT_GT(dot(pair.mu, normalize_or(z + tilted, z)), std::cos(0.1f * 3.14159f / 180.0f));
-    EXPECT_LT(pair.kappa, 100.0f);  // two lobes 5° apart make a broader one
-    EXPECT_GT(pair.kappa, 50.0f);
-}
-
-// Against a plain restatement: recompute every pair's loss at every step, merge the cheapest,
-// erase the other. Random mixtures of up to 32 lobes reduced to every smaller count: the same
-// lobes (the implementation moves the last cluster into the merged one's place).
-TEST(MixtureReduction, MatchesRecomputingEveryLossAtEveryStep)
-{
-    struct Cluster {
-        float alpha;
-        Vec3 m;
-        VmfLobe lobe;
-    };
-    std::mt19937 rng(5);
-    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-    for (int trial = 0; trial < 40; ++trial) {
-        const int n = 2 + trial % 31;
-        std::vector<VmfLobe> lobes;
-        for (int i = 0; i < n; ++i) {
-            const Vec3 mu = normalize_or({2 * unit(rng) - 1, 2 * unit(rng) - 1, unit(rng) + 0.2f}, {0, 0, 1});
-            lobes.push_back({0.05f + unit(rng), mu, std::exp(8.0f * unit(rng))});
-        }
-        for (int count = 1; count < n; count += 1 + n / 6) {
-            std::vector<Cluster> plain;
-            for (const VmfLobe& l : lobes)
-                plain.push_back({l.alpha, l.alpha * float(mean_resultant_length(l.kappa)) * l.mu, l});
-            while (int(plain.size()) > count) {
-                size_t a = 0, b = 1;
-                float best = std::numeric_limits<float>::infinity();
-                for (size_t i = 0; i < plain.size(); ++i)
-                    for (size_t j = i + 1; j < plain.size(); ++j) {
-                        const float loss = length(plain[i].m) + length(plain[j].m) - length(plain[i].m + plain[j].m);
-                        if (loss < best) best = loss, a = i, b = j;
-                    }
-                Cluster merged{plain[a].alpha + plain[b].alpha, plain[a].m + plain[b].m, {}};
-                merged.lobe = {merged.alpha, normalize_or(merged.m, {0, 0, 1}),
-                               kappa_from_resultant(length(merged.m) / merged.alpha)};
-                plain[a] = merged;
-                plain.erase(plain.begin() + std::ptrdiff_t(b));
-            }
-            std::vector<VmfLobe> expected;
-            float total = 0.0f;
-            for (const Cluster& c : plain) total += c.alpha;
-            for (const Cluster& c : plain) expected.push_back({c.alpha / total, c.lobe.mu, c.lobe.kappa});
-            std::vector<VmfLobe> got = merge_nearest_lobes(lobes, count);
-            ASSERT_EQ(got.size(), expected.size()) << n << " -> " << count;
-            const auto by_alpha = [](const VmfLobe& x, const VmfLobe& y) { return x.alpha < y.alpha; };
-            std::sort(got.begin(), got.end(), by_alpha);
-            std::sort(expected.begin(), expected.end(), by_alpha);
-            for (size_t i = 0; i < got.size(); ++i) {
-                EXPECT_NEAR(got[i].alpha, expected[i].alpha, 1e-5f) << n << " -> " << count;
-                EXPECT_GT(dot(got[i].mu, expected[i].mu), 1.0f - 1e-5f) << n << " -> " << count;
-                EXPECT_NEAR(got[i].kappa / expected[i].kappa, 1.0f, 1e-3f) << n << " -> " << count;
-            }
-        }
-    }
-}
-
-TEST(MixtureReduction, ALobeMergedWithItsOwnCopyKeepsItsKappaWithinFivePercent)
-{
-    for (float kappa : {0.01f, 0.5f, 2.0f, 5.0f, 20.0f, 100.0f, 1000.0f}) {
-        const VmfLobe lobe{0.5f, normalize_or({0.3f, -0.2f, 1.0f}, {}), kappa};
-        const std::vector<VmfLobe> merged = merge_nearest_lobes(std::vector<VmfLobe>{lobe, lobe}, 1);
-        ASSERT_EQ(merged.size(), 1u);
-        EXPECT_NEAR(merged[0].kappa / kappa, 1.0f, 0.05f) << kappa;
-        EXPECT_GT(dot(merged[0].mu, lobe.mu), 1.0f - 1e-6f);
-    }
-}
-
-TEST(MixtureReduction, AntipodalLobesMergeIntoTheBroadestLobeAndTooManyAreRefused)
-{
-    const std::vector<VmfLobe> merged =
-        merge_nearest_lobes(std::vector<VmfLobe>{{0.5f, {0, 0, 1}, kKappaMax}, {0.5f, {0, 0, -1}, kKappaMax}}, 1);
-    ASSERT_EQ(merged.size(), 1u);
-    expect_valid_lobes(merged);
-    EXPECT_LT(merged[0].kappa, 0.01f);  // the two cancel: no preferred direction is left
-    const std::vector<VmfLobe> too_many(4 * kMaxLobes + 1, VmfLobe{0.1f, {0, 0, 1}, 10.0f});
-    EXPECT_THROW(merge_nearest_lobes(too_many, 4), Error);
 }
 
 TEST(LobeBudget, AddsLobesOnlyWhileTheErrorIsAboveTolerance)

@@ -19,9 +19,6 @@ double mean_resultant_length(double kappa)
         const double k2 = kappa * kappa;
         return kappa * (1.0 / 3.0 - k2 / 45.0);
     }
-    // Past κ = 20, coth κ − 1 = 2e^{−2κ}/(1 − e^{−2κ}) < 1e-17, below double's rounding at 1:
-    // mixture reduction asks this of every child lobe of every binned texel.
-    if (kappa > 20.0) return 1.0 - 1.0 / kappa;
     return 1.0 / std::tanh(kappa) - 1.0 / kappa;
 }
 

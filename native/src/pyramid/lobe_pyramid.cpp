@@ -105,10 +105,7 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
         const bool binned = hierarchical && binned_level(l);
         bins = binned ? BinnedLevel(level.size) : BinnedLevel();
         TexelFitSettings fit_settings = settings.fit;
-        if (binned) {
-            fit_settings.merge_children = true;
-            fit_settings.em.max_iterations = std::min(fit_settings.em.max_iterations, kBinnedIterations);
-        }
+        if (binned) fit_settings.em.max_iterations = std::min(fit_settings.em.max_iterations, kBinnedIterations);
         if (!hierarchical) fit_settings.few_sample_shortcut = false;  // the reference: §7.1 as written
         // EM seeds from the children's lobes only where a texel has more samples than lobes.
         const bool seeded = largest_footprint(map.width, map.height, l) > uint64_t(slots);

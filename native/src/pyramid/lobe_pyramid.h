@@ -42,10 +42,10 @@ struct PyramidSettings {
     int budget_sample_cap = 256;
     // Refine every texel's lobes against the effective BRDF of `brdf` (ndf/brdf_refinement.h)
     // after EM. Measured: at Blinn-Phong 128 on the six synthetic patterns, 4 lobes' mean error at
-    // levels 4 and 6 falls by a fifth (0.25 → 0.20 of Toksvig's); on a 1024² fBm map at GGX
-    // roughness 0.3, the mean over levels 1+ from 0.238 to 0.202, and the fit takes about 60× as
-    // long (0.32 s → 21 s on 2 cores; 29 s on a busy host). The refinement sees the texel's fine
-    // normals, at most kRefineSampleCap of them.
+    // levels 4 and 6 falls by a quarter (0.26 → 0.20 of Toksvig's); on a 1024² fBm map at GGX
+    // roughness 0.3, the mean over levels 1+ from 0.248 to 0.202, and the fit takes 60× as long
+    // (0.37 s → 21 s on 2 cores). The refinement sees the texel's fine normals, at most
+    // kRefineSampleCap of them.
     bool refine = false;
     // The most memory a fit or bake may use (bake/memory_budget.h); 0: physical memory.
     uint64_t max_memory_bytes = 0;

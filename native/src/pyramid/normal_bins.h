@@ -94,13 +94,9 @@ bool accumulate_texel_bins(const NormalMap& map, const BinnedLevel& finer, int l
 inline constexpr int kMaxBinSamples = 256;
 
 // ... and runs at most this many EM iterations on them (or fewer, as EmSettings::max_iterations
-// says), from the children's lobes merged down (TexelFitSettings::merge_children). Measured at
-// 2048², mean error over levels 1+ (512 texels a level) against 5 iterations: fbm 0.0786 /
-// 0.0780, weave 0.1333 / 0.1331, brushed 0.0372 / 0.0380, bumps 0.0578 / 0.0577. Against the two
-// starts of 5 iterations each that this fit made before (the farthest children, the farthest
-// samples): fbm 0.0786 / 0.0855, weave 0.1333 / 0.1302, brushed 0.0372 / 0.0378, bumps 0.0578 /
-// 0.0554, scratches 0.0087 / 0.0092, in a third less time on levels 4 and up.
-inline constexpr int kBinnedIterations = 3;
+// says). Measured at 2048², mean error over levels 1+ against 10 iterations: fbm 0.0839 / 0.0856,
+// weave 0.1294 / 0.1292, brushed 0.0369 / 0.0355, for 0.12 s less fitting on one thread.
+inline constexpr int kBinnedIterations = 5;
 
 // The samples EM fits to: each bin (or merged cell, see kMaxBinSamples) as its mean resultant
 // (|n| ≤ 1) weighted by its count.
