@@ -56,6 +56,21 @@ TEST(VmfMath, ResultantFromKappaInvertsBanerjeeExactly)
     }
 }
 
+TEST(VmfMath, DroppingLightLobesRemovesDeadAndNegligibleOnesAndRenormalizes)
+{
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    std::vector<VmfLobe> lobes{{0.3f, {0, 0, 1}, 10.0f}, {0.0f, {1, 0, 0}, 10.0f}, {nan, {0, 1, 0}, 10.0f},
+                               {5e-5f, {0, 0, 1}, 20.0f}, {0.1f, {0, 1, 0}, 30.0f}};
+    std::vector<VmfLobe> dead_only = lobes;
+    drop_light_lobes(dead_only, 0.0f);
+    ASSERT_EQ(dead_only.size(), 3u);  // α = 0 and NaN go, the tiny positive weight stays
+    drop_light_lobes(lobes, 1e-4f);
+    ASSERT_EQ(lobes.size(), 2u);
+    EXPECT_FLOAT_EQ(lobes[0].alpha, 0.75f);
+    EXPECT_FLOAT_EQ(lobes[1].alpha, 0.25f);
+    EXPECT_EQ(lobes[1].kappa, 30.0f);
+}
+
 TEST(VmfMath, DensityIsNormalizedAcrossTheWholeKappaRange)
 {
     for (float k : {kKappaMin, 0.5f, 8.0f, 300.0f, kKappaMax}) {

@@ -94,4 +94,13 @@ void vmf_legendre_coefficients(double kappa, int lmax, double* out)
     for (int l = 1; l <= lmax; ++l) out[l] = out[l - 1] * ratios[size_t(l)];
 }
 
+void drop_light_lobes(std::vector<VmfLobe>& lobes, float min_alpha)
+{
+    std::erase_if(lobes, [&](const VmfLobe& l) { return !(l.alpha > 0.0f && l.alpha >= min_alpha); });
+    float total = 0.0f;
+    for (const VmfLobe& l : lobes) total += l.alpha;
+    if (total > 0.0f)
+        for (VmfLobe& l : lobes) l.alpha /= total;
+}
+
 }  // namespace ndfbake

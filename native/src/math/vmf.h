@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "math/vec3.h"
 
@@ -57,5 +58,9 @@ inline float log_weighted_normalizer(const VmfLobe& lobe)
 // (Funk-Hecke: convolving a zonal function with the lobe scales its degree-l band by A_l).
 // A_1 = A(κ); A_l → exp(−l(l+1)/(2κ)) for large κ (cf. eq. 19).
 void vmf_legendre_coefficients(double kappa, int lmax, double* out);
+
+// Removes the lobes whose weight is not at least `min_alpha` (and every α ≤ 0 or NaN), then
+// rescales the rest so that Σα = 1 again: a mixture's dead or negligible lobes, pruned.
+void drop_light_lobes(std::vector<VmfLobe>& lobes, float min_alpha);
 
 }  // namespace ndfbake

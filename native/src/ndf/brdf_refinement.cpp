@@ -268,10 +268,7 @@ void LobeRefiner::refine(std::span<const WeightedNormal> normals, std::vector<Vm
         if (escape.cost < best.cost) best = std::move(escape);
     }
 
-    std::erase_if(best.lobes, [](const VmfLobe& l) { return !(l.alpha >= kNegligibleLobeWeight); });
-    float total = 0.0f;
-    for (const VmfLobe& l : best.lobes) total += l.alpha;
-    for (VmfLobe& l : best.lobes) l.alpha /= total;
+    drop_light_lobes(best.lobes, kNegligibleLobeWeight);
 
     // Kept only if clearly closer on the independent set too, over a cap as wide as the broadest
     // lobe, before or after, reaches.

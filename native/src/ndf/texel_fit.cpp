@@ -17,15 +17,6 @@ float nearest_seed_distance(const Vec3& n, std::span<const VmfLobe> seeds)
     return nearest;
 }
 
-void prune_dead_lobes(std::vector<VmfLobe>& lobes)
-{
-    std::erase_if(lobes, [](const VmfLobe& l) { return !(l.alpha > 0.0f); });
-    float total = 0.0f;
-    for (const VmfLobe& l : lobes) total += l.alpha;
-    if (total > 0.0f)
-        for (VmfLobe& l : lobes) l.alpha /= total;
-}
-
 // EM from the children's seeds, and with settings.two_starts also from the samples, keeping the
 // likelier: the finer level's lobes (§7.1), and the fine normals
 // farthest apart. Measured on the synthetic patterns, neither start wins everywhere: the
@@ -41,13 +32,13 @@ std::vector<VmfLobe> fit_from_seeds(std::span<const WeightedNormal> samples, std
     std::vector<VmfLobe> from_children = farthest_point_seeds(child_lobes, samples, count);
     const double children_fit = fit_vmf_mixture(samples, from_children, em).mean_log_likelihood;
     if (!settings.two_starts || few_samples) {
-        prune_dead_lobes(from_children);
+        drop_light_lobes(from_children, 0.0f);
         return from_children;
     }
     std::vector<VmfLobe> from_samples = farthest_point_seeds({}, samples, count);
     const double samples_fit = fit_vmf_mixture(samples, from_samples, em).mean_log_likelihood;
     std::vector<VmfLobe>& best = children_fit >= samples_fit ? from_children : from_samples;
-    prune_dead_lobes(best);
+    drop_light_lobes(best, 0.0f);
     return std::move(best);
 }
 
