@@ -3,6 +3,9 @@
 set -euo pipefail
 packages=(build-essential cmake pkg-config libopenimageio-dev libopenexr-dev openimageio-tools
           libgtest-dev python3 blender assimp-testmodels xvfb
+          python3-numpy          # the add-on's level of detail, the demo's and tests' image error (Debian's
+                                 # Blender does not depend on it)
+          python3-matplotlib     # examples/plot_bench.py, the bench chart
           glslang-tools          # compiles the bakes' ndfbake.glsl in the tests
           libegl1 libegl-mesa0   # EEVEE in `blender -b` renders through surfaceless EGL (Mesa)
           clang libclang-rt-14-dev)  # clang + libFuzzer: the fuzz targets (scripts/fuzz.sh)

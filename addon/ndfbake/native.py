@@ -363,6 +363,12 @@ def load():
             return _loaded
         if _failure is not None:
             raise LibraryError(_failure)
+        try:
+            import numpy  # noqa: F401  (the mesh arrays of texel_density; official Blender builds carry it)
+        except ImportError:
+            _failure = ("NumPy is missing from Blender's Python, and the bake needs it "
+                        "(Debian: apt install python3-numpy)")
+            raise LibraryError(_failure) from None
         tried = []
         env = os.environ.get(ENV_VARIABLE)
         if env and not os.path.isfile(env):  # asked for: not silently another library

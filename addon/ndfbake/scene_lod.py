@@ -27,11 +27,17 @@ the texture repeats per unit of UV, measured on the UV map the texture reads (te
 the texture coordinates come from anything else (Generated, Object, math nodes) the density is
 unknown, and the bake leaves the level of detail to the renderer.
 """
+from __future__ import annotations  # np.ndarray in annotations: registering needs no NumPy
+
 import math
 from dataclasses import dataclass
 
 import bpy
-import numpy as np
+
+try:
+    import numpy as np
+except ImportError:  # native.status() says so in the panel; nothing here runs without the library
+    np = None
 
 from . import material_scan, native
 

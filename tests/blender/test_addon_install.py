@@ -9,8 +9,8 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
   a revert work through the operators; bl_info's version is the library's; the OSL check says
   what this build has.
 - In separate Blender processes the installed add-on gets no library, a file that is not a
-  library, and a library of another ABI (compiled here when a C compiler is available): the
-  add-on still enables, the panel draws the one message, the operator reports it; no traceback.
+  library, a library of another ABI (compiled here when a C compiler is available), and a Python
+  without NumPy (Debian's Blender does not depend on it): the add-on still enables, the panel draws the one message, the operator reports it; no traceback.
 """
 import os
 import shutil
@@ -118,12 +118,15 @@ def child_case(case):
     """Runs inside the child Blender: the add-on installed in BLENDER_USER_SCRIPTS has a bad
     library. Prints 'CHILD OK <message>' when every check holds."""
     import addon_utils
+    if case == "numpy":
+        sys.modules["numpy"] = None  # `import numpy` now raises ImportError: a Blender without NumPy
     module = addon_utils.enable("ndfbake", default_set=True, handle_error=None)
     assert module is not None, "the add-on must enable without its library"
     lib, message = module.native.status()
     assert lib is None and message, (lib, message)
     expected = {"missing": "native library not found", "broken": "could not be loaded",
-                "abi": "has ABI version 99, this add-on needs %d" % module.native.ABI_VERSION}[case]
+                "abi": "has ABI version 99, this add-on needs %d" % module.native.ABI_VERSION,
+                "numpy": "NumPy is missing from Blender's Python"}[case]
     assert expected in message, message
     assert "\n" not in message
     material = bpy.data.materials.new("M")
@@ -150,14 +153,15 @@ def _fake_abi_library(path):
 
 def test_unusable_library_gives_one_message():
     zip_path = _zip()
-    for case in ("missing", "broken", "abi"):
+    for case in ("missing", "broken", "abi", "numpy"):
         with h.scratch_dir("ndfb-scripts-") as scripts:
             addons = os.path.join(scripts, "addons")
             os.makedirs(addons)
             with zipfile.ZipFile(zip_path) as z:
                 z.extractall(addons)
             library = os.path.join(addons, "ndfbake", "libndfbake.so")
-            os.remove(library)
+            if case != "numpy":  # that case keeps the library and loses NumPy (child_case)
+                os.remove(library)
             if case == "broken":
                 with open(library, "wb") as f:
                     f.write(b"not a shared object")
