@@ -195,6 +195,25 @@ TEST_F(TangentApi, DerivativeLengthsPastFloatRangeAreCappedAndTangentsStayUnit)
     }
 }
 
+// Also from fuzz_tangent (corpus/tangent/small-angle-sine-overflow): a sliver corner whose edges
+// are each finite in float when squared (|e|² = 1e38) but not multiplied together; the corner
+// angle is taken from their cross product, which overflowed, and its weight came out infinite.
+TEST_F(TangentApi, SliverCornersOfHugeEdgesKeepFiniteWeights)
+{
+    TestMesh m;
+    const uint32_t a = m.vertex({0, 0, 0}), b = m.vertex({1e19f, 0, 0}), c = m.vertex({1e19f, 1e14f, 0});
+    m.face({a, b, c}, {{{0, 0}}, {{1, 0}}, {{1, 1e-5f}}}, kUp);
+    const ndfb_mesh v = view(m);
+    std::vector<float> tangents(3 * 4), magnitudes(3 * 2);
+    ASSERT_EQ(ndfb_tangents(ctx_, &v, 1, tangents.data(), tangents.size(), magnitudes.data(), magnitudes.size()),
+              NDFB_OK) << error();
+    for (int corner = 0; corner < 3; ++corner) {
+        EXPECT_NEAR(tangents[corner * 4], 1.0f, 1e-6f) << "corner " << corner;  // +X, as dP/du points
+        EXPECT_NEAR(magnitudes[corner * 2], 1e19f, 1e14f) << "corner " << corner;  // |dP/du|
+        EXPECT_NEAR(magnitudes[corner * 2 + 1], 1e19f, 1e14f) << "corner " << corner;  // |dP/dv|
+    }
+}
+
 TEST_F(TangentApi, TexelDensityIsTheSquareRootOfUVAreaOverWorldArea)
 {
     TestMesh m = unit_square();  // 2 x 2 world units mapped onto the unit UV square

@@ -371,10 +371,14 @@ private:
         const __m128 zero = _mm_setzero_ps(), tiny = _mm_set1_ps(1.17549435e-38f), huge = _mm_set1_ps(3.40282347e+38f);
         // Below FLT_MIN the estimate is unusable; past FLT_MAX (overflowed: normals that were
         // never normalized, huge coordinates) or NaN it gives NaN: the scalar path handles both.
+        // The same for |q1|²|q2|², which bounds the small-angle branch's |q1 × q2|²: past FLT_MAX
+        // its sine came out infinite, and so did the corner's weight (found by fuzz_tangent).
         auto risky = [&](__m128 x) {
             return _mm_or_ps(_mm_and_ps(_mm_cmpgt_ps(x, zero), _mm_cmplt_ps(x, tiny)), _mm_cmpnle_ps(x, huge));
         };
-        if (_mm_movemask_ps(_mm_or_ps(_mm_or_ps(risky(l1), risky(l2)), risky(lt))) & 7) return false;
+        const __m128 overflowing = _mm_cmpnle_ps(_mm_mul_ps(l1, l2), huge);
+        if (_mm_movemask_ps(_mm_or_ps(_mm_or_ps(_mm_or_ps(risky(l1), risky(l2)), risky(lt)), overflowing)) & 7)
+            return false;
         const __m128 one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f), three_halves = _mm_set1_ps(1.5f);
         auto rsqrt = [&](__m128 x) {  // one Newton step; lanes with x == 0 give 0, like normalizing zero
             const __m128 y = _mm_rsqrt_ps(x);
