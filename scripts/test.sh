@@ -4,6 +4,10 @@
 # then each libFuzzer target for a short while (build-fuzz, when clang and libFuzzer are installed).
 #   NDFBAKE_SANITIZE_TESTS=0   skip the sanitizer build
 #   NDFBAKE_FUZZ_SECONDS=N     seconds per fuzz target (default 20; 0 skips fuzzing)
+#   NDFBAKE_FUZZ_SEED=N        libFuzzer's seed (default 1, so that every run replays the corpus and
+#                              then tries the same mutations: the test command fails for a
+#                              regression, not for what a random seed happened to find; 0 picks
+#                              a random seed, as `scripts/fuzz.sh TARGET 600` campaigns do)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 start=$SECONDS
@@ -31,7 +35,7 @@ if [ "$fuzz_seconds" != 0 ]; then
   if bash "$root/scripts/fuzz.sh" --check; then
     for target in decode bake tangent; do
       stage "fuzz $target"
-      NDFBAKE_FUZZ_KEEP=0 bash "$root/scripts/fuzz.sh" "$target" "$fuzz_seconds"
+      NDFBAKE_FUZZ_KEEP=0 bash "$root/scripts/fuzz.sh" "$target" "$fuzz_seconds" -seed="${NDFBAKE_FUZZ_SEED:-1}"
     done
   else
     echo "== test.sh: fuzzing skipped: clang++ with libFuzzer is not installed (apt-get install clang libclang-rt-14-dev)"
