@@ -828,14 +828,35 @@ TEST_F(IoTest, FolderUnderARegularFileIsNotWritable)
     EXPECT_EQ(files_in(dir_), std::vector<std::string>{"file.txt"});
 }
 
+// Permission bits do not bind root: a test running as root (CI, containers) takes nobody's
+// effective ids for the block, as tests/blender/test_addon_bad_inputs.py does, and gives them back
+// after. The saved set-user-ID stays 0, which is what allows the way back.
+class UnprivilegedScope {
+public:
+    UnprivilegedScope() : dropped_(::geteuid() == 0)
+    {
+        constexpr uid_t kNobody = 65534;
+        if (dropped_ && (::setegid(kNobody) != 0 || ::seteuid(kNobody) != 0))
+            throw std::runtime_error("cannot take nobody's effective ids");
+    }
+    ~UnprivilegedScope()
+    {
+        if (dropped_ && (::seteuid(0) != 0 || ::setegid(0) != 0)) std::abort();
+    }
+    UnprivilegedScope(const UnprivilegedScope&) = delete;
+    UnprivilegedScope& operator=(const UnprivilegedScope&) = delete;
+
+private:
+    bool dropped_;
+};
+
 TEST_F(IoTest, ReadOnlyFolderIsNotWritable)
 {
-    if (::geteuid() == 0)
-        GTEST_SKIP() << "running as root: permission bits do not block writes "
-                        "(FolderUnderARegularFileIsNotWritable covers the error path)";
     const fs::path locked = dir_ / "locked";
     fs::create_directory(locked);
-    fs::permissions(locked, fs::perms::owner_read | fs::perms::owner_exec);
+    fs::permissions(locked, fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                                fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
+    const UnprivilegedScope unprivileged;
     expect_error([&] { ensure_writable_directory(locked.string()); }, Status::io_error,
                  {locked.string(), "not writable", "Permission denied"});
     const std::vector<float> rgba = test_rgba(2, 2);
