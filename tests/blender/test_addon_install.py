@@ -10,7 +10,8 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
   what this build has.
 - In separate Blender processes the installed add-on gets no library, a file that is not a
   library, a library of another ABI (compiled here when a C compiler is available), and a Python
-  without NumPy (Debian's Blender does not depend on it): the add-on still enables, the panel draws the one message, the operator reports it; no traceback.
+  without NumPy (Debian's Blender does not depend on it): the add-on still enables, the panel
+  draws the one message, the operator reports it; no traceback.
 """
 import os
 import shutil
