@@ -36,7 +36,8 @@ std::vector<std::string> bench_method_names();
 // Runs the benchmark and writes into out_dir: bench.csv (one row per map, method, BRDF and level),
 // bench.md (means over maps and levels per method and BRDF, Pareto-optimal rows marked) and
 // heatmap_<method>_level<L>.png (per-texel error of the default bake and Toksvig, for one map).
-// `progress` gets a line per finished (map, method). Returns the rows.
+// `progress` gets a line per finished (map, method), one per BRDF for methods fitted to it.
+// Returns the rows.
 std::vector<BenchRow> run_benchmark(const BenchSettings& settings, const std::string& out_dir,
                                     const std::function<bool(const std::string& line)>& progress);
 
