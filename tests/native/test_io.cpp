@@ -21,6 +21,7 @@
 #include "io/atomic_file.h"
 #include "io/lobe_exr.h"
 #include "io/normal_decode.h"
+#include "test_support.h"
 
 namespace ndfbake {
 namespace {
@@ -179,29 +180,8 @@ void expect_error(F&& call, Status status, const std::vector<std::string>& parts
     }
 }
 
-class IoTest : public ::testing::Test {
+class IoTest : public testing_support::TempDirTest {
 protected:
-    void SetUp() override
-    {
-        // Parameterized test names contain '/'.
-        std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-        std::replace(name.begin(), name.end(), '/', '_');
-        dir_ = fs::path(::testing::TempDir()) /
-               ("ndfbake_io_" + name + "_" + std::to_string(::getpid()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override
-    {
-        std::error_code ec;
-        fs::permissions(dir_, fs::perms::owner_all, fs::perm_options::add, ec);
-        for (const auto& entry : fs::recursive_directory_iterator(dir_, ec))
-            fs::permissions(entry.path(), fs::perms::owner_all, fs::perm_options::add, ec);
-        fs::remove_all(dir_, ec);
-    }
-
-    std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
     std::vector<std::string> files_in(const fs::path& dir) const
     {
         std::vector<std::string> names;
@@ -219,8 +199,6 @@ protected:
                     quantize<uint8_t>(stored_values(smooth_normals(kWidth, kHeight), 3, false)));
         return file;
     }
-
-    fs::path dir_;
 };
 
 // ---- formats, depths, channel counts ---------------------------------------------------------
