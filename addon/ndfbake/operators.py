@@ -61,6 +61,7 @@ class _ModalBakes:
     _done = None      # jobs whose native bake succeeded, waiting for finish()
     _outcomes = None  # (material name, BakeResult or BakeError)
     _job = None
+    _collected = False  # whether _job's outcome is in _done or _outcomes yet
     _count = 0
     _cancelled = False  # Esc: whatever the jobs' own outcomes, nothing is applied
     _preview_wait_start = None
@@ -95,6 +96,7 @@ class _ModalBakes:
     def _next_job(self):
         global running_job
         self._job = running_job = self._jobs.pop(0)
+        self._collected = False
         self._job.start()
 
     def _fraction(self):
@@ -164,19 +166,21 @@ class _ModalBakes:
             self._status(context)
             return {"PASS_THROUGH"}
         job.join()
+        if not self._collected:  # once: the ticks of a wait for previews find the last job done
+            self._collected = True
+            if job.error is not None and job.error.code != "CANCELLED":
+                self._drop([job])
+                self._outcomes.append((job.material_name, job.error))
+            else:
+                self._done.append(job)
         if self._cancelled or (job.error is not None and job.error.code == "CANCELLED"):
-            # Esc may come after this job's bake finished: it is dropped all the same.
-            self._drop([job] + self._done)
+            # Esc may come after this job's bake finished, or during the wait: dropped all the same.
+            self._drop(self._done)
             self._done = []
             self._end(context)
             self.report({"INFO"}, "ndfbake: bake of '%s' cancelled: no file and no node changed%s" % (
                 job.material_name, "; no other material changed either" if self._count > 1 else ""))
             return {"CANCELLED"}
-        if job.error is not None:
-            self._drop([job])
-            self._outcomes.append((job.material_name, job.error))
-        else:
-            self._done.append(job)
         if self._jobs:
             self._next_job()
             self._status(context)

@@ -7,11 +7,16 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 - The Bake button's path: the native bake on a worker thread (BakeJob.start), cancelled from the
   main thread while it fits (what Esc does in the modal operator): the same.
 - A cancelled re-bake keeps the previous bake's files byte for byte and its nodes.
+- The Bake button's modal operator, driven by timer events while a material preview renders:
+  the finished bake is applied once, after the wait; Esc during the wait applies nothing.
 """
 import hashlib
 import os
 import sys
 import time
+import types
+
+import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import test_addon_helpers as h  # noqa: E402
@@ -101,7 +106,65 @@ def test_cancelled_rebake_keeps_the_previous_bake():
             h.expect(h.data_counts() == data_baked, "data-blocks changed")
 
 
+def _drive_modal(material, previews, escape_at=None):
+    """Runs the Bake button's modal operator on `material` with timer events, a material preview
+    rendering for the first `previews` ticks after the bake; Esc at tick `escape_at` of that wait.
+    Returns (what modal returned, how often finish() ran, the reports)."""
+    from ndfbake import bake, operators
+
+    class Operator(operators._ModalBakes):
+        reports = []
+
+        def report(self, kind, message):
+            self.reports.append((kind, message))
+
+    finished = []
+    real_finish = bake.finish
+    bake.finish = lambda job: finished.append(job) or real_finish(job)
+    try:
+        op = Operator()
+        op._jobs, op._done, op._outcomes = [bake.prepare(material, bake.BakeSettings(max_lobes=1))], [], []
+        op._count, op._cancelled, op._preview_wait_start = 1, False, None
+        op._next_job()
+        ticks = []
+
+        def preview_running():
+            ticks.append(None)
+            return len(ticks) <= previews
+
+        op._preview_running = preview_running
+        context = types.SimpleNamespace(window_manager=bpy.context.window_manager, screen=None)
+        timer, escape = types.SimpleNamespace(type="TIMER", value="NOTHING"), types.SimpleNamespace(
+            type="ESC", value="PRESS")
+        deadline = time.time() + 30
+        while time.time() < deadline:
+            time.sleep(0.01)
+            if escape_at is not None and len(ticks) == escape_at:
+                op.modal(context, escape)
+            result = op.modal(context, timer)
+            if result != {"PASS_THROUGH"}:
+                return result, len(finished), Operator.reports
+        raise AssertionError("the modal operator did not end")
+    finally:
+        bake.finish = real_finish
+
+
+def test_the_modal_operator_applies_a_bake_once_after_the_preview_wait():
+    from ndfbake import bake
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory)
+        result, finishes, reports = _drive_modal(material, previews=3)
+        h.expect(result == {"FINISHED"} and finishes == 1 and bake.is_baked(material),
+                 "returned %s, finish() ran %d times, reports %s" % (result, finishes, reports))
+        bake.revert(material)
+        before, files_before = h.dump_material(material), _snapshot(directory)
+        result, finishes, reports = _drive_modal(material, previews=3, escape_at=2)
+        h.expect(result == {"CANCELLED"} and finishes == 0, "Esc in the wait: %s, %d" % (result, finishes))
+        _expect_unchanged(material, directory, before, files_before, "Esc during the preview wait")
+
+
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_cancel_during_fit_and_during_write, test_cancel_worker_thread_from_main_thread,
-           test_cancelled_rebake_keeps_the_previous_bake])
+           test_cancelled_rebake_keeps_the_previous_bake,
+           test_the_modal_operator_applies_a_bake_once_after_the_preview_wait])
