@@ -144,6 +144,10 @@ def prepare(material, settings=None):
         raise BakeError("BAD_SETTINGS", "maximum lobes must be 1..%d, got %d" % (native.MAX_LOBES, settings.max_lobes))
     if not 0.0 <= settings.tolerance <= 1.0:
         raise BakeError("BAD_SETTINGS", "tolerance must be in [0, 1], got %g" % settings.tolerance)
+    if settings.level_of_detail not in ("SCENE", "RENDERER"):
+        raise BakeError("BAD_SETTINGS", "level of detail must be SCENE or RENDERER, got %r" % settings.level_of_detail)
+    lod, lod_note = _plan_lod(material, scan, settings)
+    # Reserved last: nothing after it can fail, so no failed prepare keeps a folder name.
     try:
         relative, absolute = lobe_folders.new_folder(material)
     except lobe_folders.FolderError as e:
@@ -151,9 +155,6 @@ def prepare(material, settings=None):
     if not absolute:
         raise BakeError("UNSAVED_BLEND", "save the .blend first: the lobe textures of '%s' are written beside it"
                         % material.name)
-    if settings.level_of_detail not in ("SCENE", "RENDERER"):
-        raise BakeError("BAD_SETTINGS", "level of detail must be SCENE or RENDERER, got %r" % settings.level_of_detail)
-    lod, lod_note = _plan_lod(material, scan, settings)
     return BakeJob(material_name=material.name, material_pointer=material.as_pointer(),
                    image_path=scan.image_path, folder=relative,
                    out_dir=absolute + lobe_folders.PENDING_SUFFIX, final_dir=absolute,

@@ -243,6 +243,11 @@ def test_non_finite_uvs():
         bpy.data.objects["Plane"].data.uv_layers.active.data[0].uv = (float("nan"), 0.0)
         bpy.ops.wm.save_mainfile()
         expect_refused(material, "BAD_MESH", ["'Bumpy'", "not finite", "Level of Detail to Renderer"], directory)
+        # The refused bakes kept no folder name: once the mesh is mended, the bake takes the first.
+        from ndfbake import bake
+        bpy.data.objects["Plane"].data.uv_layers.active.data[0].uv = (0.0, 0.0)
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        h.expect(result.folder == "//Bumpy.ndfbake", "the mended bake went to %s" % result.folder)
     _case(run)
 
 
