@@ -439,8 +439,9 @@ def finish(job):
             texture = tree.nodes[texture_name]
             group = nodes.build_material_group("NDFB " + material.name, principled, normal_map, texture, images,
                                                atlas, job.lod)
-            targets.append({"principled": principled_name, "group_node": "", "node_group": group.name,
-                            "bypassed": [], "eevee_output": ""})
+            targets.append({"principled": principled_name, "normal_map": normal_map_name, "group_node": "",
+                            "node_group": group.name, "bypassed": [], "eevee_output": "",
+                            "principled_settings": nodes.principled_settings(principled)})
             node, bypassed, eevee_output = nodes.insert_group_node(tree, group, principled, normal_map, texture)
             targets[-1].update(group_node=node.name, bypassed=bypassed, eevee_output=eevee_output)
             if job.lod is not None and bpy.context.scene.camera is not None:
@@ -529,7 +530,8 @@ def _remove_nodes(material, rec, keep_edits=True):
     for target in rec.get("targets", []):
         bypassed = [tuple(b) for b in target.get("bypassed", [])]
         group = nodes.remove_group_node(tree, target["group_node"], target["principled"], bypassed,
-                                        target.get("eevee_output", ""), keep_edits)
+                                        target.get("eevee_output", ""), keep_edits, target.get("normal_map", ""),
+                                        target.get("principled_settings"))
         if group is not None:
             used.append(group.name)
         used.append(target.get("node_group", ""))

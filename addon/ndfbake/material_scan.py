@@ -7,7 +7,8 @@ The chain ndfbake filters is the one Blender users build for a tangent-space nor
 Reroute nodes between them are followed. Only Principled BSDFs that reach an active Material
 Output (through any shader nodes) count, so stray nodes do not make a material "need" a bake. Once
 a material is baked its Principled BSDFs are bypassed (no longer reach the output); the bake record
-names them, so re-baking scans the same nodes.
+names them, so re-baking scans the same nodes. The nodes a record names carry their role in it
+(ROLE_KEY), so that they are found again after the user renames them (recorded_node).
 
 Choices the design leaves open, made here:
 - One normal-map image per material. Several Principled BSDFs may share it (each gets its own
@@ -39,6 +40,10 @@ import bpy
 from . import node_animation
 
 RECORD_KEY = "ndfbake_bake"
+# Custom property on each node a bake record names: "<role>:<key>", the key being the name the
+# bake gave its group node (unique in the tree when made). Roles: principled, normal_map, group,
+# eevee_output.
+ROLE_KEY = "ndfbake_role"
 # Colour spaces whose transform is the identity on the stored values (is_data covers the first two).
 DATA_COLOR_SPACES = {"Non-Color", "Raw", "Linear"}
 DEFAULT_LINKED_ROUGHNESS = 0.5
@@ -117,6 +122,34 @@ def reachable_principled(tree):
     return sorted(found, key=lambda n: n.name)
 
 
+def node_role(role, key):
+    return "%s:%s" % (role, key)
+
+
+def recorded_node(tree, name, role):
+    """The node a bake record calls `name`, playing `role` (node_role): by name while it carries
+    the role; renamed, the one node that carries it (a copy carries it too: then none is sure);
+    by name alone for a record older than roles, where no node carries any role of its bake."""
+    node = tree.nodes.get(name) if name else None
+    if node is not None and node.get(ROLE_KEY) == role:
+        return node
+    carriers = [n for n in tree.nodes if n.get(ROLE_KEY) == role]
+    if len(carriers) == 1:
+        return carriers[0]
+    key = role.partition(":")[2]
+    if not carriers and node is not None and node.get(ROLE_KEY) is None and \
+            not any(str(n.get(ROLE_KEY, "")).partition(":")[2] == key for n in tree.nodes):
+        return node
+    return None
+
+
+def clear_roles(tree, key):
+    """Takes the roles of the bake whose group node was made as `key` off every node."""
+    for node in tree.nodes:
+        if ROLE_KEY in node.keys() and str(node[ROLE_KEY]).partition(":")[2] == key:
+            del node[ROLE_KEY]
+
+
 def record(material):
     """The bake record stored on the material (a dict), or None."""
     import json
@@ -191,9 +224,22 @@ def scan(material):
         return result
     tree = material.node_tree
     rec = record(material)
+    groups = {}  # Principled name: the group node that stands for it since the bake
     if rec:
-        principled = [tree.nodes.get(t["principled"]) for t in rec.get("targets", [])]
-        principled = [p for p in principled if p is not None]
+        principled = []
+        for t in rec.get("targets", []):
+            key = t.get("group_node", "")
+            p = recorded_node(tree, t.get("principled", ""), node_role("principled", key))
+            if p is None:
+                result.problems.append(Problem(
+                    "PRINCIPLED_GONE", "the Principled BSDF '%s' that ndfbake's node group stands in for in material "
+                                       "'%s' was deleted: Revert brings it back from the group node's inputs; then "
+                                       "bake again" % (t.get("principled", ""), material.name)))
+                return result
+            principled.append(p)
+            group = recorded_node(tree, key, node_role("group", key))
+            if group is not None and "Roughness" in group.inputs:
+                groups[p.name] = group
     else:
         if not active_outputs(tree):
             result.problems.append(Problem("NO_OUTPUT", "material '%s' has no active Material Output" % material.name))
@@ -248,6 +294,8 @@ def scan(material):
     first_tex = tree.nodes[result.targets[0].image_texture]
     result.wrap = first_tex.extension
     first = tree.nodes[result.targets[0].principled]
+    # Baked, the group node holds the Principled's inputs as the user edits them now.
+    first = groups.get(first.name, first)
     rough = first.inputs["Roughness"]
     result.roughness_linked = rough.is_linked
     result.roughness = DEFAULT_LINKED_ROUGHNESS if rough.is_linked else float(rough.default_value)

@@ -50,7 +50,7 @@ from dataclasses import dataclass
 
 import bpy
 
-from . import node_animation, scene_lod
+from . import material_scan, node_animation, scene_lod
 
 GROUP_VERSION = 2
 TAG = "ndfbake"                       # ID/custom property marking what this add-on created
@@ -68,6 +68,10 @@ HALF_INV_KAPPA_RESOLUTION = 4e-4      # native/src/io/lobe_exr.h kHalfInvKappaRe
 # cos θ is floored here (θ ≈ 89.9°) so that tan²θ stays finite where a lobe faces away.
 GRAZING_MIN_COSINE = 1e-3
 EEVEE_OUTPUT = "ndfbake EEVEE Output"   # the Material Output (target EEVEE) a bake may add
+GROUP_NODE_OFFSET = 250               # the group node sits this far above its Principled BSDF
+# The Principled BSDF's settings that are no sockets: kept in the bake record, for Revert to make
+# a deleted Principled again.
+PRINCIPLED_SETTINGS = ("distribution", "subsurface_method")
 
 # Principled inputs the lobe group computes itself rather than passing through.
 COMPUTED_INPUTS = {"Normal", "Roughness"}
@@ -732,6 +736,7 @@ def add_eevee_output(material_tree, node, bypassed):
     try:
         eevee.name = eevee.label = EEVEE_OUTPUT
         eevee[TAG] = GROUP_VERSION
+        eevee[material_scan.ROLE_KEY] = material_scan.node_role("eevee_output", node.name)
         eevee.target = "EEVEE"
         eevee.parent = output.parent
         eevee.location = (output.location.x, output.location.y - 220)
@@ -752,8 +757,10 @@ def _wire_group_node(material_tree, node, group_tree, principled, normal_map, im
     node.node_tree = group_tree
     node.name = "ndfbake"
     node[TAG] = GROUP_VERSION
+    for role, marked in (("group", node), ("principled", principled), ("normal_map", normal_map)):
+        marked[material_scan.ROLE_KEY] = material_scan.node_role(role, node.name)
     node.label = "ndfbake: %d lobe%s" % (lobe_count(group_tree), "" if lobe_count(group_tree) == 1 else "s")
-    node.location = (principled.location.x, principled.location.y + 250)
+    node.location = (principled.location.x, principled.location.y + GROUP_NODE_OFFSET)
     node.width = max(node.width, 220)
     node.parent = principled.parent
     for socket in carried_inputs(principled):
@@ -778,20 +785,51 @@ def _socket_by_identifier(sockets, identifier):
     return None
 
 
-def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee_output="", keep_edits=True):
+def principled_settings(principled):
+    """The Principled BSDF's settings that are no inputs, for _recreate_principled."""
+    return {name: getattr(principled, name) for name in PRINCIPLED_SETTINGS}
+
+
+def _recreate_principled(material_tree, node, name, settings, normal_map):
+    """A Principled BSDF in place of the one the user deleted after the bake, where it was, with its
+    settings and its Normal from the Normal Map node; write_back_inputs then gives it the inputs."""
+    principled = material_tree.nodes.new("ShaderNodeBsdfPrincipled")
+    principled.name = name
+    principled.parent = node.parent
+    principled.location = (node.location.x, node.location.y - GROUP_NODE_OFFSET)
+    for setting, value in (settings or {}).items():
+        if setting in PRINCIPLED_SETTINGS:
+            setattr(principled, setting, value)
+    if normal_map is not None:
+        material_tree.links.new(normal_map.outputs["Normal"], principled.inputs["Normal"])
+    return principled
+
+
+def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee_output="", keep_edits=True,
+                      normal_map_name="", settings=None):
     """Undoes insert_group_node: the EEVEE output it added goes, and every link now leaving the
     group node leaves the Principled BSDF again, wherever the user has led it since the bake (a
     Mix Shader put after the group stays); where the group node is gone, the links it bypassed
     come back. With keep_edits, the node's inputs go back to the Principled (write_back_inputs;
     not when undoing a half-built insert, where only driver variables that insert pointed at the
-    node read the Principled again). Then the group node goes. Returns the group tree it used (or
-    None)."""
+    node read the Principled again). Then the group node goes. The nodes are found by their roles
+    (material_scan.recorded_node), renamed or not; a Principled deleted since the bake is made
+    again (with `settings`, principled_settings(), and its Normal from the Normal Map node).
+    Returns the group tree it used (or None)."""
     nodes = material_tree.nodes
-    added = nodes.get(eevee_output) if eevee_output else None
+    key = node_name
+
+    def find(name, role):
+        return material_scan.recorded_node(material_tree, name, material_scan.node_role(role, key))
+
+    added = find(eevee_output, "eevee_output") if eevee_output else None
     if added is not None and added.get(TAG) is not None:
         nodes.remove(added)
-    node = nodes.get(node_name)
-    principled = nodes.get(principled_name)
+    node = find(node_name, "group")
+    principled = find(principled_name, "principled")
+    if principled is None and node is not None and keep_edits:
+        principled = _recreate_principled(material_tree, node, principled_name, settings,
+                                          find(normal_map_name, "normal_map") if normal_map_name else None)
     group_tree = node.node_tree if node is not None else None
     if node is not None and principled is not None:
         if keep_edits:
@@ -799,7 +837,7 @@ def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee
         else:
             node_animation.retarget_variables(material_tree, node, principled,
                                               [(j, i) for i, j in _shared_inputs(principled, node).items()])
-    node_animation.remove_node_animation(material_tree, node_name)
+    node_animation.remove_node_animation(material_tree, node.name if node is not None else node_name)
     if node is not None:
         leaving = [link for output in node.outputs if output.type == "SHADER" for link in output.links]
         targets = [(link.to_socket, link.is_muted) for link in leaving]
@@ -819,6 +857,7 @@ def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee
             material_tree.links.new(principled.outputs["BSDF"], socket).is_muted = muted
     if node is not None:
         node_animation.remove_node(material_tree, node)
+    material_scan.clear_roles(material_tree, key)
     return group_tree
 
 

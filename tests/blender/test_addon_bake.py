@@ -43,8 +43,15 @@ def _principled_count(tree, output="BSDF"):
     return sum(1 for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled" and re.fullmatch(pattern, n.name))
 
 
+def _without_role(node_dump):
+    """A dump_tree node without the role property a bake puts on the nodes its record names."""
+    from ndfbake import material_scan
+    kind, props = node_dump
+    return kind, dict(props, custom=[k for k in props["custom"] if k != material_scan.ROLE_KEY])
+
+
 def test_bake_adds_only_the_group_and_bypass():
-    from ndfbake import bake, nodes
+    from ndfbake import bake, material_scan, nodes
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         before, data_before, files_before = h.dump_material(material), h.data_counts(), h.listing(directory)
@@ -55,12 +62,14 @@ def test_bake_adds_only_the_group_and_bypass():
         added = set(after["nodes"]) - set(before["nodes"])
         h.expect(added == {"ndfbake", nodes.EEVEE_OUTPUT}, "added nodes: %s" % added)
         h.expect(set(before["nodes"]) <= set(after["nodes"]), "a node went away")
+        # The nodes the record names carry their role in it (found again when renamed), and
+        # nothing else of any node changes; the Principled's output is bypassed (links, below).
         for name, node in before["nodes"].items():
-            if name == "Principled BSDF":
-                continue  # its output is bypassed (links, below); nothing of the node itself changes
-            h.expect(after["nodes"][name] == node, "node %s changed" % name)
-        h.expect(after["nodes"]["Principled BSDF"] == before["nodes"]["Principled BSDF"],
-                 "the Principled BSDF node itself changed")
+            tagged = name in ("Principled BSDF", "Normal Map")
+            h.expect((_without_role(after["nodes"][name]) if tagged else after["nodes"][name]) == node,
+                     "node %s changed" % name)
+            h.expect(tagged == (material_scan.ROLE_KEY in material.node_tree.nodes[name].keys()),
+                     "node %s: role %s" % (name, material.node_tree.nodes[name].get(material_scan.ROLE_KEY)))
         removed_links = set(before["links"]) - set(after["links"])
         added_links = set(after["links"]) - set(before["links"])
         h.expect(removed_links == {("Principled BSDF", "BSDF", "Material Output", "Surface", False, True)},
@@ -607,6 +616,55 @@ def test_a_material_changed_during_the_bake_is_not_baked():
         h.expect(bake.is_baked(bpy.data.materials["Renamed"]), "the renamed material did not get its bake")
 
 
+def test_renamed_nodes_are_found_again():
+    """Renamed after the bake, the Principled BSDF, the Normal Map, the group node and the EEVEE
+    output are still the record's: a re-bake fits the Roughness set on the group node, and
+    Revert restores the material exactly (names aside)."""
+    from ndfbake import bake, material_scan, nodes
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory)
+        tree = material.node_tree
+        before = h.dump_material(material)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        for old, new in (("Principled BSDF", "Skin"), ("Normal Map", "NM"), ("ndfbake", "Filtered"),
+                         (nodes.EEVEE_OUTPUT, "EO")):
+            tree.nodes[old].name = new
+        tree.nodes["Filtered"].inputs["Roughness"].default_value = 0.9
+        bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        settings = material_scan.record(material)["settings"]
+        h.expect(abs(settings["roughness"] - 0.9) < 1e-6, "the re-bake fitted roughness %g, not the group "
+                 "node's 0.9" % settings["roughness"])
+        tree.nodes["ndfbake"].name = "Filtered again"
+        bake.revert(material)
+        h.expect(not [n.name for n in tree.nodes if material_scan.ROLE_KEY in n.keys() or n.get(nodes.TAG)],
+                 "nodes of the bake left: %s" % [n.name for n in tree.nodes])
+        skin = tree.nodes["Skin"]
+        h.expect([l.to_node.name for l in skin.outputs["BSDF"].links] == ["Material Output"], "Skin not at the output")
+        h.expect(abs(skin.inputs["Roughness"].default_value - 0.9) < 1e-6, "the node's Roughness did not go back")
+        skin.name, tree.nodes["NM"].name = "Principled BSDF", "Normal Map"
+        skin.inputs["Roughness"].default_value = 0.35
+        h.expect(h.dump_material(material) == before, "material differs after revert: %s"
+                 % h.differences(before, h.dump_material(material)))
+
+
+def test_a_deleted_principled_is_made_again():
+    """The bypassed Principled BSDF deleted after the bake: a re-bake says so, and Revert makes it
+    again from the group node's inputs and the recorded settings, where it was."""
+    from ndfbake import bake
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory)
+        tree = material.node_tree
+        tree.nodes["Principled BSDF"].distribution = "MULTI_GGX"
+        before = h.dump_material(material)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        tree.nodes.remove(tree.nodes["Principled BSDF"])
+        e = h.raised(bake.BakeError, lambda: bake.prepare(material), "a re-bake without the Principled")
+        h.expect(e.code == "PRINCIPLED_GONE" and "Revert" in e.message, "%s: %s" % (e.code, e.message))
+        bake.revert(material)
+        h.expect(h.dump_material(material) == before, "material differs after revert: %s"
+                 % h.differences(before, h.dump_material(material)))
+
+
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_bake_adds_only_the_group_and_bypass, test_failure_while_building_nodes_rolls_back,
@@ -617,4 +675,5 @@ if __name__ == "__main__":
            test_nla_strips_and_driver_variables_follow_the_inputs, test_curve_settings_and_deletions_on_the_node_survive,
            test_a_copy_sharing_the_action_keeps_its_own_edits,
            test_driver_variables_by_socket_name_and_on_the_material_follow, test_a_linked_action_is_refused,
-           test_a_material_changed_during_the_bake_is_not_baked])
+           test_a_material_changed_during_the_bake_is_not_baked, test_renamed_nodes_are_found_again,
+           test_a_deleted_principled_is_made_again])
