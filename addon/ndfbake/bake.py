@@ -496,9 +496,7 @@ def materials_needing_bake(scene):
     """Materials of this file (not linked from a library: they are baked in their own) with a
     normal-map chain on objects the scene renders, in name order."""
     found = {}
-    for obj in scene.objects:
-        if obj.hide_render or obj.type not in {"MESH", "CURVE", "SURFACE", "META", "FONT"}:
-            continue
+    for obj in scene_lod.rendered_objects(scene):
         for slot in obj.material_slots:
             material = slot.material
             if material is not None and material.library is None and material.name not in found \

@@ -130,11 +130,32 @@ def scene_cameras(scene):
     return [camera_footprint(scene, c) for c in cameras]
 
 
+RENDERED_TYPES = {"MESH", "CURVE", "SURFACE", "META", "FONT"}
+
+
+def rendered_objects(scene):
+    """Mesh-like objects the scene renders: in a collection of a view layer it renders, through no
+    excluded or render-disabled collection, and not disabled in renders themselves."""
+    found = {}
+
+    def visit(layer_collection):
+        if layer_collection.exclude or layer_collection.collection.hide_render:
+            return
+        for obj in layer_collection.collection.objects:
+            if not obj.hide_render and obj.type in RENDERED_TYPES:
+                found.setdefault(obj.as_pointer(), obj)
+        for child in layer_collection.children:
+            visit(child)
+
+    for view_layer in scene.view_layers:
+        if view_layer.use:
+            visit(view_layer.layer_collection)
+    return list(found.values())
+
+
 def objects_using(scene, material):
-    """Mesh-like objects the scene renders that have `material` in a slot."""
-    return [obj for obj in scene.objects
-            if not obj.hide_render and obj.type in {"MESH", "CURVE", "SURFACE", "META", "FONT"}
-            and any(slot.material == material for slot in obj.material_slots)]
+    """Objects the scene renders (rendered_objects) that have `material` in a slot."""
+    return [obj for obj in rendered_objects(scene) if any(slot.material == material for slot in obj.material_slots)]
 
 
 @dataclass

@@ -203,6 +203,17 @@ def test_bake_all_bakes_what_the_scene_renders():
         h.plane_with(seen, "A")
         h.plane_with(plain, "B")
         h.plane_with(hidden, "C").hide_render = True
+        # Not rendered either: objects in a render-disabled collection, or in one the view layer
+        # excludes (the same material would be needed if any of these rendered).
+        scene = bpy.context.scene
+        for name, hide in (("Off in renders", True), ("Excluded", False)):
+            collection = bpy.data.collections.new(name)
+            scene.collection.children.link(collection)
+            collection.hide_render = hide
+            obj = h.plane_with(h.normal_mapped_material("In " + name, png), name + " plane")
+            scene.collection.objects.unlink(obj)
+            collection.objects.link(obj)
+        bpy.context.view_layer.layer_collection.children["Excluded"].exclude = True
         bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "scene.blend"))
         needed = [m.name for m in bake.materials_needing_bake(bpy.context.scene)]
         h.expect(needed == ["Seen"], "needed: %s" % needed)
