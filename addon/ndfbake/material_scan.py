@@ -281,12 +281,13 @@ def scan(material):
         if problem:
             result.problems.append(problem)
             return result
-        images.setdefault(tex.image.name, tex.image)
+        # By file: two Image datablocks of one file are one normal map.
+        images.setdefault(os.path.normcase(image_file_path(tex.image)), tex.image)
         result.targets.append(Target(principled=p.name, normal_map=nm.name, image_texture=tex.name))
     if len(images) > 1:
         result.problems.append(Problem(
             "SEVERAL_IMAGES", "material '%s' uses %d normal-map images (%s): ndfbake bakes one per material" % (
-                material.name, len(images), ", ".join(sorted(images)))))
+                material.name, len(images), ", ".join(sorted(i.name for i in images.values())))))
         return result
 
     result.image = next(iter(images.values()))

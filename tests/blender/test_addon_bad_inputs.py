@@ -10,7 +10,8 @@ as root, permission bits do not bind, so the bake runs under an unprivileged eff
 where the lobe folder would go (left alone: the bake takes the next folder name); an unsaved .blend; a corrupt image file; a Normal Map fed by
 something other than an Image Texture; two different normal-map images in one material; a
 material linked from a library .blend (Bake and Revert refuse it); an image with unsaved edits; a
-muted Normal Map node; a mesh whose UVs are not finite (the level of detail cannot be measured).
+muted Normal Map node; a mesh whose UVs are not finite (the level of detail cannot be measured;
+the refused bakes keep no folder name). Not refused: one file through two Image datablocks.
 """
 import contextlib
 import os
@@ -195,6 +196,31 @@ def test_two_normal_map_images():
     _case(run)
 
 
+def test_one_file_through_two_image_datablocks():
+    """Not refused: two Image datablocks of one file (loaded twice) are one normal map."""
+    def run(directory):
+        from ndfbake import bake
+        material = h.baked_scene(directory)
+        tree = material.node_tree
+        second = tree.nodes.new("ShaderNodeBsdfPrincipled")
+        mix = tree.nodes.new("ShaderNodeMixShader")
+        tree.links.new(tree.nodes["Principled BSDF"].outputs[0], mix.inputs[1])
+        tree.links.new(second.outputs[0], mix.inputs[2])
+        tree.links.new(mix.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+        tex = tree.nodes.new("ShaderNodeTexImage")
+        tex.image = bpy.data.images.load(os.path.join(directory, "normal.png"), check_existing=False)
+        tex.image.colorspace_settings.name = "Non-Color"
+        h.expect(len(bpy.data.images) == 2, "images: %s" % [i.name for i in bpy.data.images])
+        nm = tree.nodes.new("ShaderNodeNormalMap")
+        tree.links.new(tex.outputs["Color"], nm.inputs["Color"])
+        tree.links.new(nm.outputs["Normal"], second.inputs["Normal"])
+        bpy.ops.wm.save_mainfile()
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        h.expect(len([n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup"]) == 2,
+                 "one group per Principled BSDF: %s" % result.summary)
+    _case(run)
+
+
 def test_linked_material():
     def run(directory):
         from ndfbake import bake
@@ -257,4 +283,5 @@ if __name__ == "__main__":
            test_material_without_normal_map, test_missing_image_file, test_packed_image, test_generated_image,
            test_srgb_tagged_normal_map, test_object_space_normal_map, test_read_only_output_folder,
            test_file_in_place_of_the_output_folder, test_unsaved_blend, test_corrupt_image_file,
-           test_normal_map_not_from_an_image_texture, test_two_normal_map_images])
+           test_normal_map_not_from_an_image_texture, test_two_normal_map_images,
+           test_one_file_through_two_image_datablocks])
