@@ -866,12 +866,13 @@ def lobe_count(group_tree):
 
 
 def remove_unused_groups(names):
-    """Removes the named node groups this add-on made once nothing uses them, then the shared
-    helper groups if they are unused too."""
-    ordered = []
-    for name in dict.fromkeys(names):
-        ordered += [name, name + " atlas"]  # the material's group, then its atlas table
-    for name in ordered + [LOBE_GROUP, GRAZING_GROUP, LOD_GROUP, TAPS_GROUP, BILINEAR_GROUP]:
-        tree = bpy.data.node_groups.get(name)
-        if tree is not None and tree.get(TAG) is not None and tree.users == 0:
-            bpy.data.node_groups.remove(tree)
+    """Removes the named node groups this add-on made once nothing uses them, then the groups they
+    used (a material's atlas table, the shared helpers) if nothing else uses those either."""
+    pending = list(dict.fromkeys(names)) + [LOBE_GROUP, GRAZING_GROUP, LOD_GROUP, TAPS_GROUP, BILINEAR_GROUP]
+    while pending:
+        tree = bpy.data.node_groups.get(pending.pop(0))
+        if tree is None or tree.get(TAG) is None or tree.users != 0:
+            continue
+        # Found through the nodes, not by name: a long material name cuts "<group> atlas" short.
+        pending += [n.node_tree.name for n in tree.nodes if n.bl_idname == "ShaderNodeGroup" and n.node_tree]
+        bpy.data.node_groups.remove(tree)

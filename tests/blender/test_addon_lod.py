@@ -257,6 +257,21 @@ def test_a_bake_with_a_camera_writes_only_the_levels_it_reaches():
         h.expect(material.node_tree.animation_data is None, "revert left the drivers' animation data")
 
 
+def test_revert_removes_the_atlas_table_of_a_long_material_name():
+    """Blender cuts names at 63 bytes, so the atlas table of 'NDFB <name>' is no '<group> atlas':
+    Revert finds it through the group's nodes."""
+    from ndfbake import bake
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory, size=32, material_name="M" * 63)
+        _camera(location=(0.0, 0.0, 6.0), lens=50.0)
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        h.expect("level of detail from the camera" in result.summary, result.summary)
+        h.expect(len(bpy.data.node_groups) >= 2, "groups: %s" % [g.name for g in bpy.data.node_groups])
+        bake.revert(material)
+        leftovers = [g.name for g in bpy.data.node_groups]
+        h.expect(not leftovers, "revert left node groups: %s" % leftovers)
+
+
 def test_a_mapping_node_scales_the_texel_density():
     from ndfbake import bake
     with h.scratch_dir() as directory:
@@ -341,5 +356,6 @@ if __name__ == "__main__":
            test_the_level_of_detail_group_renders_the_footprint_formula,
            test_atlas_lookups_equal_bilinear_filtering_of_the_level_files,
            test_a_bake_with_a_camera_writes_only_the_levels_it_reaches,
+           test_revert_removes_the_atlas_table_of_a_long_material_name,
            test_a_mapping_node_scales_the_texel_density,
            test_texel_density_counts_only_the_material_faces_and_the_render_uv_map])
