@@ -113,7 +113,7 @@ def _plan_lod(material, scan, settings):
         return None, "its texture coordinates do not come from one UV map (through Mapping nodes)"
     repeat, uv_map = uvs.pop()
     try:
-        return scene_lod.plan(bpy.context.scene, material, tuple(scan.image.size), uv_map, repeat), ""
+        return scene_lod.plan(bpy.context.scene, material, tuple(scan.image.size), uv_map, repeat)
     except native.Error as e:
         raise BakeError("BAD_MESH", "cannot measure the texel density of the meshes using '%s' (%s): fix the mesh, "
                                     "or set Level of Detail to Renderer" % (material.name, e.message)) from None

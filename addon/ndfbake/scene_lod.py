@@ -305,13 +305,13 @@ def material_lod(scene, material, image_size, uv_map="", repeat=1.0):
 
 
 def plan(scene, material, image_size, uv_map="", repeat=1.0):
-    """The LodPlan of `material` for its scene's active camera, or None where the scene gives no
-    level of detail (no camera, or no rendered object with UV area uses the material)."""
+    """(the LodPlan of `material` for its scene's active camera, ""), or (None, why not) where the
+    scene gives no level of detail."""
     if scene.camera is None or scene.camera.type != "CAMERA":
-        return None
+        return None, "the scene has no active camera"
     needs = material_lod(scene, material, image_size, uv_map, repeat)
     if needs.texels_per_unit <= 0.0:
-        return None
+        return None, "no object the scene renders has UV area where it uses the material"
     camera = camera_footprint(scene, scene.camera)
     return LodPlan(levels=needs.levels, texels_per_unit=needs.texels_per_unit, pixel_angle=camera.pixel_angle,
-                   pixel_size=camera.pixel_size, footprint_max=needs.footprint_max)
+                   pixel_size=camera.pixel_size, footprint_max=needs.footprint_max), ""

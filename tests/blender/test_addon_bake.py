@@ -57,6 +57,8 @@ def test_bake_adds_only_the_group_and_bypass():
         before, data_before, files_before = h.dump_material(material), h.data_counts(), h.listing(directory)
         result = bake.bake_material(material, bake.BakeSettings(max_lobes=4))
         print("bake:", result.summary)
+        h.expect(result.summary.endswith("level 0 filtered by the renderer (the scene has no active camera)"),
+                 "the summary does not say why the level of detail is the renderer's: %s" % result.summary)
         after = h.dump_material(material)
 
         added = set(after["nodes"]) - set(before["nodes"])
