@@ -14,6 +14,8 @@
 #include <fstream>
 #include <thread>
 
+#include <OpenImageIO/imageio.h>
+
 #include "io/lobe_exr.h"
 #include "io/normal_encode.h"
 #include "ndfbake.h"
@@ -241,6 +243,37 @@ TEST_F(BakeApi, PerLobeColourFollowsTheNormalsItBelongsTo)
             }
         }
     EXPECT_GT(checked, 40);
+}
+
+TEST_F(BakeApi, GreyAndAlphaColourImageGivesGreyLobes)
+{
+    // A two-channel colour image is grey and alpha: the lobes' colour is the grey, never the alpha.
+    const NormalMap map = synthesize(Pattern::bumps, 16, 16);
+    write_normal_map(path("bumps.png"), map);
+    std::vector<float> grey_alpha(map.normals.size() * 2);
+    for (size_t i = 0; i < map.normals.size(); ++i) {
+        grey_alpha[i * 2 + 0] = 0.25f;
+        grey_alpha[i * 2 + 1] = 1.0f;
+    }
+    {
+        const std::string file = path("grey.tif");  // float: no sRGB decoding
+        auto out = OIIO::ImageOutput::create(file);
+        ASSERT_TRUE(out && out->open(file, OIIO::ImageSpec(16, 16, 2, OIIO::TypeDesc::FLOAT)));
+        ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, grey_alpha.data()) && out->close());
+    }
+    const std::string color = path("grey.tif");
+    write_.color_path = color.c_str();
+    write_.precision = NDFB_PRECISION_FLOAT;
+    ASSERT_EQ(ndfb_bake(ctx_, path("bumps.png").c_str(), path("out").c_str(), &decode_, &fit_, &write_), NDFB_OK)
+        << ndfb_last_error(ctx_);
+    int w = 0, h = 0;
+    const auto colors = read_rgba_exr(path("out") + "/level02_color0.exr", w, h);
+    ASSERT_EQ(w * h, 16);
+    for (int t = 0; t < w * h; ++t) {
+        const float alpha = colors[size_t(t) * 4 + 3];
+        ASSERT_GT(alpha, 0.0f);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(colors[size_t(t) * 4 + size_t(c)] / alpha, 0.25f, 1e-4f) << c;
+    }
 }
 
 struct BadInput {

@@ -34,9 +34,11 @@ ColorImage decode_color_image(const std::string& path)
     image.height = spec.height;
     image.linearized = !is_float && !tagged_linear;
     image.rgb.resize(size_t(spec.width) * size_t(spec.height) * 3);
+    // Fewer than three channels is grey (plus alpha, which is no colour): R = G = B = channel 0.
+    const bool grey = channels < 3;
     for (size_t p = 0; p < size_t(spec.width) * size_t(spec.height); ++p)
         for (int c = 0; c < 3; ++c) {
-            float v = pixels[p * size_t(channels) + size_t(std::min(c, channels - 1))];
+            float v = pixels[p * size_t(channels) + size_t(grey ? 0 : c)];
             if (!std::isfinite(v)) v = 0.0f;
             image.rgb[p * 3 + size_t(c)] = image.linearized ? srgb_to_linear(v) : v;
         }
