@@ -4,6 +4,7 @@
 #include <numeric>
 #include <optional>
 
+#include "error.h"
 #include "math/sphere.h"
 #include "ndf/brdf_refinement.h"
 #include "pyramid/alignment.h"
@@ -158,7 +159,8 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
 
     if (settings.align && slots > 1)
         align_lobe_slots(pyramid, settings, [&](double fraction) { return !tick || tick(done + share * fraction); });
-    if (tick) tick(1.0);
+    // The last tick may ask to stop too: a one-texel map has no other (no level above 0).
+    if (tick && !tick(1.0)) throw Error(Status::cancelled, "cancelled");
     return pyramid;
 }
 
