@@ -303,6 +303,11 @@ TEST_F(BakeApi, BadInputsGetSpecificErrorsAndLeaveNoOutput)
         EXPECT_NE(std::string(ndfb_last_error(ctx_)).find(c.name), std::string::npos) << ndfb_last_error(ctx_);
         EXPECT_FALSE(std::filesystem::exists(out)) << c.name << ": a failed bake left its output folder";
     }
+    // Nor the parents a nested output folder needed.
+    const std::string nested = path("a") + "/b/c/";
+    EXPECT_EQ(ndfb_bake(ctx_, path("missing.png").c_str(), nested.c_str(), &decode_, &fit_, &write_),
+              NDFB_ERROR_FILE_NOT_FOUND);
+    EXPECT_FALSE(std::filesystem::exists(path("a"))) << "a failed bake left the parents of its output folder";
     // An output folder that cannot exist (under a regular file): an i/o error, before any work.
     const std::string out = good_png + "/out";
     EXPECT_EQ(ndfb_bake(ctx_, good_png.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_ERROR_IO);

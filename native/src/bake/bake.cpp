@@ -467,17 +467,23 @@ BakeOutcome bake_file_into(const std::string& input_path, const std::string& out
     return write_pyramid_into(pyramid, decoded, out_dir, settings, named, timings, progress);
 }
 
-// Runs `body`; if it fails and out_dir did not exist before, removes the (then empty) folder that
-// ensure_writable_directory created, so that a failed bake leaves nothing behind at all.
+// Runs `body`; if it fails, removes the (then empty) folders that ensure_writable_directory
+// created for out_dir, its missing parents too, so that a failed bake leaves nothing behind at all.
 template <typename Body>
 BakeOutcome removing_new_folder_on_failure(const std::string& out_dir, Body&& body)
 {
     std::error_code ec;
-    const bool existed = fs::exists(out_dir, ec);
+    std::vector<fs::path> missing;  // innermost first
+    fs::path folder = fs::path(out_dir).lexically_normal();
+    if (!folder.has_filename()) folder = folder.parent_path();  // a trailing separator
+    for (; !folder.empty() && !fs::exists(folder, ec); folder = folder.parent_path()) {
+        missing.push_back(folder);
+        if (folder == folder.parent_path()) break;
+    }
     try {
         return body();
     } catch (...) {
-        if (!existed) fs::remove(out_dir, ec);  // removes only an empty folder
+        for (const fs::path& created : missing) fs::remove(created, ec);  // removes only empty folders
         throw;
     }
 }
