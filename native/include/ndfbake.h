@@ -213,7 +213,8 @@ NDFB_API ndfb_status ndfb_texel_error(ndfb_context ctx, ndfb_normal_map map, ndf
 /* ---- files --------------------------------------------------------------------------------- */
 /* Writes level{L}_lobe{j}.exr for every level and lobe slot, optional level{L}_color{j}.exr, and
  * report.json into out_dir, each atomically (temp name, then rename). On failure or cancel, no
- * file of this call remains. */
+ * file of this call remains. The files and the report record the options the pyramid was fitted
+ * with; of fit_options only the progress callback and threads are used. */
 NDFB_API ndfb_status ndfb_pyramid_write(ndfb_context ctx, ndfb_pyramid pyramid, ndfb_normal_map map,
                                         const char* out_dir, const ndfb_fit_options* fit_options,
                                         const ndfb_write_options* options);

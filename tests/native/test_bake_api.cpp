@@ -58,6 +58,30 @@ TEST_F(BakeApi, WritesSelfDescribingLobeTexturesAndAReport)
     for (const std::string& entry : listing(out)) EXPECT_EQ(entry.find(".ndfbake"), std::string::npos) << entry;
 }
 
+TEST_F(BakeApi, WrittenFilesRecordTheFitThePyramidHad)
+{
+    // Fitted with clamp and 2 lobes, written with the default options: the files say clamp and 2.
+    ndfb_normal_map map = nullptr;
+    ASSERT_EQ(ndfb_synthesize(ctx_, "fbm", 16, 16, 1, &map), NDFB_OK);
+    ndfb_fit_options fitted = fit_;
+    fitted.wrap = NDFB_WRAP_CLAMP;
+    fitted.max_lobes = 2;
+    ndfb_pyramid pyramid = nullptr;
+    ASSERT_EQ(ndfb_fit(ctx_, map, &fitted, &pyramid), NDFB_OK) << ndfb_last_error(ctx_);
+    ASSERT_EQ(ndfb_pyramid_write(ctx_, pyramid, map, path("out").c_str(), &fit_, &write_), NDFB_OK)
+        << ndfb_last_error(ctx_);
+    std::ifstream report(path("out") + "/report.json");
+    const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+    for (const char* recorded : {"\"wrap\": \"clamp\"", "\"max_lobes\": 2"})
+        EXPECT_NE(text.find(recorded), std::string::npos) << recorded << " not in " << text;
+    std::string wrap;
+    for (const auto& [key, value] : read_image_info(path("out") + "/level01_lobe0.exr").attributes)
+        if (key == "ndfbake:wrap") wrap = value;
+    EXPECT_EQ(wrap, "clamp");
+    ndfb_pyramid_destroy(pyramid);
+    ndfb_normal_map_destroy(map);
+}
+
 TEST_F(BakeApi, MaxLevelsFitsAndWritesOnlyTheLevelsAsked)
 {
     const std::string input = synth_file(Pattern::fbm, 32, 32, "fbm.png");

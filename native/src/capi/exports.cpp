@@ -454,8 +454,11 @@ NDFB_API ndfb_status ndfb_pyramid_write(ndfb_context ctx, ndfb_pyramid p, ndfb_n
                 "the pyramid was fitted to a map of another size");
         WriteSettings write = to_write(options);
         if (write.source_name.empty()) write.source_name = "memory";
-        write_pyramid(pyramid, map->decoded, out_dir, to_pyramid(fit_options), write, BakeTimings{},
-                      to_progress(fit_options));
+        // The files and report describe the fit the pyramid had; fit_options bring the progress
+        // callback and the threads.
+        PyramidSettings settings = pyramid.settings;
+        settings.threads = to_pyramid(fit_options).threads;
+        write_pyramid(pyramid, map->decoded, out_dir, settings, write, BakeTimings{}, to_progress(fit_options));
     });
 }
 

@@ -68,6 +68,7 @@ struct LobeLevel {
 class LobePyramid {
 public:
     NormalMap source;
+    PyramidSettings settings;  // what it was fitted with: its files and report say so
     WrapMode wrap = WrapMode::wrap;
     int slots = 0;
     std::vector<LobeLevel> levels;
