@@ -300,6 +300,26 @@ TEST_F(BakeApi, GreyAndAlphaColourImageGivesGreyLobes)
     }
 }
 
+TEST_F(BakeApi, ABadColourImageFailsBeforeTheFit)
+{
+    const std::string input = synth_file(Pattern::bumps, 16, 16, "bumps.png");
+    const std::string small = synth_file(Pattern::bumps, 8, 8, "small.png"), missing = path("missing.png");
+    fit_.progress = +[](void* stages, const char* stage, float) -> int {
+        static_cast<std::vector<std::string>*>(stages)->push_back(stage);
+        return 0;
+    };
+    for (const auto& [color, expected] : {std::pair{small, NDFB_ERROR_INVALID_ARGUMENT},
+                                          std::pair{missing, NDFB_ERROR_FILE_NOT_FOUND}}) {
+        std::vector<std::string> stages;
+        fit_.progress_user = &stages;
+        write_.color_path = color.c_str();
+        EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("out").c_str(), &decode_, &fit_, &write_), expected) << color;
+        EXPECT_NE(std::string(ndfb_last_error(ctx_)).find(color), std::string::npos) << ndfb_last_error(ctx_);
+        EXPECT_TRUE(stages.empty()) << color << ": reached stage " << stages.front();
+        EXPECT_FALSE(std::filesystem::exists(path("out")));
+    }
+}
+
 struct BadInput {
     const char* name;
     std::string contents;  // written to the input file unless `missing`

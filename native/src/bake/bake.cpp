@@ -330,6 +330,15 @@ std::string color_file_name(int level, int lobe)
     return buffer;
 }
 
+// The per-lobe colour needs a colour image of the normal map's size (the two arguments disagree).
+void require_color_size(const std::string& color_path, int width, int height, int map_width, int map_height)
+{
+    if (width != map_width || height != map_height)
+        throw Error(Status::invalid_argument, "colour image '" + color_path + "' is " + std::to_string(width) + "x" +
+                                                  std::to_string(height) + ", the normal map is " +
+                                                  std::to_string(map_width) + "x" + std::to_string(map_height));
+}
+
 BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& decoded, const std::string& out_dir,
                                const PyramidSettings& settings, const WriteSettings& write, BakeTimings timings,
                                const StageProgress& progress)
@@ -339,11 +348,7 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
     ColorImage color;
     if (!write.color_path.empty()) {
         color = decode_color_image(write.color_path);
-        if (color.width != pyramid.source.width || color.height != pyramid.source.height)
-            throw Error(Status::invalid_argument,
-                        "colour image '" + write.color_path + "' is " + std::to_string(color.width) + "x" +
-                            std::to_string(color.height) + ", the normal map is " +
-                            std::to_string(pyramid.source.width) + "x" + std::to_string(pyramid.source.height));
+        require_color_size(write.color_path, color.width, color.height, pyramid.source.width, pyramid.source.height);
     }
 
     auto start = std::chrono::steady_clock::now();
@@ -448,6 +453,11 @@ BakeOutcome bake_file_into(const std::string& input_path, const std::string& out
             check_memory_budget(estimate_bake_memory(spec.width, spec.height, layout, settings, write),
                                 settings.max_memory_bytes, spec.width, spec.height, settings.fit.max_lobes,
                                 "cannot bake '" + input_path + "'");
+        }
+        // And on a colour image that is missing, unreadable or of another size.
+        if (!write.color_path.empty()) {
+            const OIIO::ImageSpec color = open_image(write.color_path)->spec();
+            require_color_size(write.color_path, color.width, color.height, spec.width, spec.height);
         }
     }
     BakeTimings timings;
