@@ -82,6 +82,30 @@ TEST_F(BakeApi, WrittenFilesRecordTheFitThePyramidHad)
     ndfb_normal_map_destroy(map);
 }
 
+TEST_F(BakeApi, ReadLobeReturnsWhatTheLobeFilesHold)
+{
+    // Level 0 holds single normals (κ at the cap): both must store them as |r| = 1.
+    ndfb_normal_map map = nullptr;
+    ASSERT_EQ(ndfb_synthesize(ctx_, "weave", 8, 8, 1, &map), NDFB_OK);
+    ndfb_pyramid pyramid = nullptr;
+    ASSERT_EQ(ndfb_fit(ctx_, map, &fit_, &pyramid), NDFB_OK) << ndfb_last_error(ctx_);
+    write_.precision = NDFB_PRECISION_FLOAT;
+    ASSERT_EQ(ndfb_pyramid_write(ctx_, pyramid, map, path("out").c_str(), &fit_, &write_), NDFB_OK)
+        << ndfb_last_error(ctx_);
+    for (uint32_t level = 0; level < ndfb_pyramid_level_count(pyramid); ++level)
+        for (uint32_t lobe = 0; lobe < ndfb_pyramid_lobe_slots(pyramid); ++lobe) {
+            char name[48];
+            std::snprintf(name, sizeof name, "/level%02u_lobe%u.exr", level, lobe);
+            int w = 0, h = 0;
+            const std::vector<float> file = read_rgba_exr(path("out") + name, w, h);
+            std::vector<float> read(file.size());
+            ASSERT_EQ(ndfb_pyramid_read_lobe(pyramid, level, lobe, read.data(), read.size()), NDFB_OK);
+            EXPECT_EQ(read, file) << name;
+        }
+    ndfb_pyramid_destroy(pyramid);
+    ndfb_normal_map_destroy(map);
+}
+
 TEST_F(BakeApi, MaxLevelsFitsAndWritesOnlyTheLevelsAsked)
 {
     const std::string input = synth_file(Pattern::fbm, 32, 32, "fbm.png");

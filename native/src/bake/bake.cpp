@@ -55,19 +55,6 @@ void encode_lobe(const VmfLobe& lobe, float* rgba)
     rgba[3] = lobe.alpha * r * lobe.mu.z;
 }
 
-std::vector<float> lobe_texture(const LobePyramid& pyramid, int level, int slot)
-{
-    const LevelSize size = pyramid.size(level);
-    std::vector<float> rgba(size_t(size.width) * size_t(size.height) * 4);
-    std::vector<VmfLobe> lobes(static_cast<size_t>(pyramid.slots));
-    for (int y = 0; y < size.height; ++y)
-        for (int x = 0; x < size.width; ++x) {
-            pyramid.texel(level, x, y, lobes);
-            encode_lobe(lobes[size_t(slot)], &rgba[(size_t(y) * size_t(size.width) + size_t(x)) * 4]);
-        }
-    return rgba;
-}
-
 // Per-lobe colour (eq. 22): y_j = Σ ⟨z_ij⟩ w_i y_i / Σ ⟨z_ij⟩ w_i over the texel's fine texels;
 // stored as RGB = α_j y_j, A = α_j so that it filters linearly like the lobe textures.
 std::vector<std::vector<float>> color_textures(const LobePyramid& pyramid, const ColorImage& color, int level)
@@ -308,6 +295,19 @@ fs::path make_staging_dir(const fs::path& out_dir)
 }
 
 }  // namespace
+
+std::vector<float> lobe_texture(const LobePyramid& pyramid, int level, int slot)
+{
+    const LevelSize size = pyramid.size(level);
+    std::vector<float> rgba(size_t(size.width) * size_t(size.height) * 4);
+    std::vector<VmfLobe> lobes(static_cast<size_t>(pyramid.slots));
+    for (int y = 0; y < size.height; ++y)
+        for (int x = 0; x < size.width; ++x) {
+            pyramid.texel(level, x, y, lobes);
+            encode_lobe(lobes[size_t(slot)], &rgba[(size_t(y) * size_t(size.width) + size_t(x)) * 4]);
+        }
+    return rgba;
+}
 
 std::string lobe_file_name(int level, int lobe)
 {

@@ -25,6 +25,10 @@ struct BakeOutcome {
     BakeTimings timings;
 };
 
+// The texels of slot `slot` of a level as its lobe texture stores them: R = α, GBA = α·r, with
+// |r| the mean resultant length of the lobe's κ (1 at the κ cap).
+std::vector<float> lobe_texture(const LobePyramid& pyramid, int level, int slot);
+
 // Lobe texture file name for a level and slot: "level03_lobe1.exr".
 std::string lobe_file_name(int level, int lobe);
 std::string color_file_name(int level, int lobe);

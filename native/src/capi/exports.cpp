@@ -357,18 +357,13 @@ NDFB_API ndfb_status ndfb_pyramid_read_lobe(ndfb_pyramid p, uint32_t level, uint
         return NDFB_ERROR_INVALID_ARGUMENT;
     const LevelSize size = p->pyramid.size(int(level));
     if (count != size_t(size.width) * size_t(size.height) * 4) return NDFB_ERROR_INVALID_ARGUMENT;
-    std::vector<VmfLobe> lobes(size_t(p->pyramid.slots));
-    for (int y = 0; y < size.height; ++y)
-        for (int x = 0; x < size.width; ++x) {
-            p->pyramid.texel(int(level), x, y, lobes);
-            const VmfLobe& l = lobes[lobe];
-            float* out = rgba + (size_t(y) * size_t(size.width) + size_t(x)) * 4;
-            const float r = l.alpha > 0.0f ? float(resultant_from_kappa(l.kappa)) : 0.0f;
-            out[0] = l.alpha;
-            out[1] = l.alpha * r * l.mu.x;
-            out[2] = l.alpha * r * l.mu.y;
-            out[3] = l.alpha * r * l.mu.z;
-        }
+    // What the lobe file holds, texel for texel. Allocates: a caller's bad_alloc must not escape.
+    try {
+        const std::vector<float> texture = lobe_texture(p->pyramid, int(level), int(lobe));
+        std::copy(texture.begin(), texture.end(), rgba);
+    } catch (const std::bad_alloc&) {
+        return NDFB_ERROR_OUT_OF_MEMORY;
+    }
     return NDFB_OK;
 }
 
