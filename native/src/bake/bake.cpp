@@ -477,32 +477,11 @@ BakeOutcome bake_file_into(const std::string& input_path, const std::string& out
     return write_pyramid_into(pyramid, decoded, out_dir, settings, named, timings, progress);
 }
 
-// Runs `body`; if it fails, removes the (then empty) folders that ensure_writable_directory
-// created for out_dir, its missing parents too, so that a failed bake leaves nothing behind at all.
-template <typename Body>
-BakeOutcome removing_new_folder_on_failure(const std::string& out_dir, Body&& body)
-{
-    std::error_code ec;
-    std::vector<fs::path> missing;  // innermost first
-    fs::path folder = fs::path(out_dir).lexically_normal();
-    if (!folder.has_filename()) folder = folder.parent_path();  // a trailing separator
-    for (; !folder.empty() && !fs::exists(folder, ec); folder = folder.parent_path()) {
-        missing.push_back(folder);
-        if (folder == folder.parent_path()) break;
-    }
-    try {
-        return body();
-    } catch (...) {
-        for (const fs::path& created : missing) fs::remove(created, ec);  // removes only empty folders
-        throw;
-    }
-}
-
 BakeOutcome write_pyramid(const LobePyramid& pyramid, const DecodeResult& decoded, const std::string& out_dir,
                           const PyramidSettings& settings, const WriteSettings& write, BakeTimings timings,
                           const StageProgress& progress)
 {
-    return removing_new_folder_on_failure(out_dir, [&] {
+    return removing_new_folders_on_failure(out_dir, [&] {
         return write_pyramid_into(pyramid, decoded, out_dir, settings, write, timings, progress);
     });
 }
@@ -510,7 +489,7 @@ BakeOutcome write_pyramid(const LobePyramid& pyramid, const DecodeResult& decode
 BakeOutcome bake_file(const std::string& input_path, const std::string& out_dir, const DecodeOptions& decode,
                       const PyramidSettings& settings, const WriteSettings& write, const StageProgress& progress)
 {
-    return removing_new_folder_on_failure(out_dir, [&] {
+    return removing_new_folders_on_failure(out_dir, [&] {
         return bake_file_into(input_path, out_dir, decode, settings, write, progress);
     });
 }

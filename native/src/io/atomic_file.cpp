@@ -22,9 +22,11 @@ std::string temp_path_for(const std::string& final_path)
 {
     static std::atomic<uint64_t> counter{0};
     const fs::path final_file(final_path);
-    const std::string name = "." + final_file.stem().string() + ".tmp-" +
-                             std::to_string(::getpid()) + "-" + std::to_string(counter++) +
-                             final_file.extension().string();
+    // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "." + std::string&&.
+    std::string name = ".";
+    name += final_file.stem().string();
+    name += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+    name += final_file.extension().string();
     return (final_file.parent_path() / name).string();
 }
 
@@ -101,6 +103,25 @@ void ensure_writable_directory(const std::string& dir)
         throw_not_writable(dir, std::strerror(errno));
     ::close(fd);
     fs::remove(probe, ec);
+}
+
+std::vector<std::string> missing_folders(const std::string& dir)
+{
+    std::vector<std::string> missing;
+    std::error_code ec;
+    fs::path folder = fs::path(dir).lexically_normal();
+    if (!folder.has_filename()) folder = folder.parent_path();  // a trailing separator
+    for (; !folder.empty() && !fs::exists(folder, ec); folder = folder.parent_path()) {
+        missing.push_back(folder.string());
+        if (folder == folder.parent_path()) break;
+    }
+    return missing;
+}
+
+void remove_empty_folders(const std::vector<std::string>& folders)
+{
+    std::error_code ec;
+    for (const std::string& folder : folders) fs::remove(folder, ec);  // removes only an empty folder
 }
 
 }  // namespace ndfbake

@@ -4,6 +4,7 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace ndfbake {
 
@@ -20,5 +21,25 @@ void write_text_atomic(const std::string& path, const std::string& text);
 // Creates `dir` (and its parents) if missing and proves it writable by creating and removing a
 // probe file. Throws Error(io_error, "output folder '<dir>' is not writable: <reason>").
 void ensure_writable_directory(const std::string& dir);
+
+// `dir` and those of its parents that do not exist, innermost first: what
+// ensure_writable_directory(dir) would create.
+std::vector<std::string> missing_folders(const std::string& dir);
+// Removes each of `folders` that is empty, in order (missing_folders' order: a parent after its child).
+void remove_empty_folders(const std::vector<std::string>& folders);
+
+// Runs `body`; if it throws, removes the folders of `dir` that were missing before (where they
+// are empty again), so that a failed or cancelled run leaves no folder behind either.
+template <typename Body>
+decltype(auto) removing_new_folders_on_failure(const std::string& dir, Body&& body)
+{
+    const std::vector<std::string> missing = missing_folders(dir);
+    try {
+        return body();
+    } catch (...) {
+        remove_empty_folders(missing);
+        throw;
+    }
+}
 
 }  // namespace ndfbake
