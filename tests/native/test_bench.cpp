@@ -42,6 +42,19 @@ TEST_F(Bench, MeasuresEveryMethodOnTheSameFootprints)
     EXPECT_EQ(lines, 1 + int(rows.size()));
 }
 
+TEST_F(Bench, ACancelledRunWritesNothing)
+{
+    // Cancelled after the first method: no heat map, table or folder (new, and nested) is left.
+    BenchSettings settings;
+    settings.maps = {{"fbm", synthesize(Pattern::fbm, 16, 16)}};
+    settings.methods = {"bake-default", "toksvig"};
+    settings.brdfs = {BaseBrdf::ggx(0.4f)};
+    settings.levels = {2};
+    const std::string out = path("new") + "/out";
+    EXPECT_THROW(run_benchmark(settings, out, [](const std::string&) { return false; }), Error);
+    EXPECT_FALSE(std::filesystem::exists(path("new"))) << "left: " << ::testing::PrintToString(listing(path("new")));
+}
+
 TEST_F(Bench, RejectsUnknownMethods)
 {
     BenchSettings settings;

@@ -125,6 +125,13 @@ std::vector<float> texel_errors(const NdfPyramid& pyramid, int level, const Base
     return errors;
 }
 
+// A per-texel error image, kept until the run has finished (a cancelled run writes nothing).
+struct Heatmap {
+    std::string path;
+    LevelSize size;
+    std::vector<float> errors;
+};
+
 void write_heatmap(const std::string& path, const LevelSize& size, const std::vector<float>& errors)
 {
     // A perceptual ramp from dark blue (no error) through green to yellow (kHeatmapMaxError).
@@ -199,15 +206,18 @@ std::vector<std::string> bench_method_names()
     return names;
 }
 
-std::vector<BenchRow> run_benchmark(const BenchSettings& settings, const std::string& out_dir,
-                                    const std::function<bool(const std::string&)>& progress)
+namespace {
+
+// run_benchmark's work; the files are written only once every measurement is done.
+std::vector<BenchRow> run_benchmark_into(const BenchSettings& settings, const std::string& out_dir,
+                                         const std::function<bool(const std::string&)>& progress)
 {
-    if (settings.maps.empty()) throw Error(Status::invalid_argument, "bench: no maps");
     ensure_writable_directory(out_dir);
     const std::vector<std::string> methods = settings.methods.empty() ? bench_method_names() : settings.methods;
     const std::string heatmap_map = settings.heatmap_map.empty() ? settings.maps.front().first : settings.heatmap_map;
 
     std::vector<BenchRow> rows;
+    std::vector<Heatmap> heatmaps;
     for (const auto& [map_name, map] : settings.maps) {
         // The exact references, once per map, BRDF and level, shared by every method.
         std::vector<std::vector<Vec3>> directions;
@@ -273,8 +283,9 @@ std::vector<BenchRow> run_benchmark(const BenchSettings& settings, const std::st
                     for (int level : settings.levels) {
                         if (level >= pyramid->level_count()) continue;
                         const auto all = reference_texels(map, level, brdf, directions.front(), 0);
-                        write_heatmap(out_dir + "/heatmap_" + job.method + "_level" + std::to_string(level) + ".png",
-                                      pyramid->size(level), texel_errors(*pyramid, level, brdf, directions.front(), all));
+                        heatmaps.push_back({out_dir + "/heatmap_" + job.method + "_level" + std::to_string(level) + ".png",
+                                            pyramid->size(level),
+                                            texel_errors(*pyramid, level, brdf, directions.front(), all)});
                     }
                 }
                 char line[256];
@@ -298,7 +309,17 @@ std::vector<BenchRow> run_benchmark(const BenchSettings& settings, const std::st
     write_text_atomic(out_dir + "/bench.md", "# ndfbake bench\n\nMean over maps and levels; build time summed over maps."
                                              " ★: no other method is both faster and more accurate.\n" +
                                                  markdown_table(rows));
+    for (const Heatmap& heatmap : heatmaps) write_heatmap(heatmap.path, heatmap.size, heatmap.errors);
     return rows;
+}
+
+}  // namespace
+
+std::vector<BenchRow> run_benchmark(const BenchSettings& settings, const std::string& out_dir,
+                                    const std::function<bool(const std::string&)>& progress)
+{
+    if (settings.maps.empty()) throw Error(Status::invalid_argument, "bench: no maps");
+    return removing_new_folders_on_failure(out_dir, [&] { return run_benchmark_into(settings, out_dir, progress); });
 }
 
 }  // namespace ndfbake
