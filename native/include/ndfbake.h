@@ -68,9 +68,10 @@ typedef enum ndfb_representation {
     NDFB_REPR_TOKSVIG = 2      /* Toksvig's single lobe from the averaged normal's length */
 } ndfb_representation;
 
-/* Progress: fraction in [0, 1] and a stage name ("decode", "fit", "align", "write"). Called on the
- * thread that called the library. Return non-zero to cancel: the call then returns
- * NDFB_ERROR_CANCELLED and leaves no output behind. */
+/* Progress: fraction in [0, 1] and a stage name: "decode", "fit" (the lobe alignment included),
+ * "measure" (the report's error statistics), "write". Called on the thread that called the
+ * library. Return non-zero to cancel: the call then returns NDFB_ERROR_CANCELLED and leaves no
+ * output behind. */
 typedef int (*ndfb_progress_fn)(void* user, const char* stage, float fraction);
 
 typedef struct ndfb_context_s* ndfb_context;

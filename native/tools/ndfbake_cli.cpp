@@ -1,6 +1,7 @@
 // The `ndfbake` command line: a client of the public C API, like the Blender add-on.
 #include <unistd.h>
 
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -52,6 +53,8 @@ bake options:
                        --brdf (lower error for that BRDF; about 60x the fitting time)
   --no-align           fit texels independently (no lobe alignment across texels and levels)
   --threads N          worker threads (default: all cores)
+  --max-memory SIZE    refuse a map whose bake would need more memory than SIZE bytes (K, M,
+                       G: binary multiples; default: the physical memory)
   --quiet              no progress output
 
 bench options:
@@ -137,6 +140,20 @@ bool parse_number(const std::string& text, double& out)
     return !text.empty() && end && *end == '\0';
 }
 
+// A byte count, optionally with a binary K, M or G suffix: "512M", "8G", "1000000".
+bool parse_bytes(const std::string& text, uint64_t& out)
+{
+    if (text.empty()) return false;
+    const char suffix = text.back();
+    const int shift = suffix == 'K' ? 10 : suffix == 'M' ? 20 : suffix == 'G' ? 30 : 0;
+    double number = 0.0;
+    if (!parse_number(shift ? text.substr(0, text.size() - 1) : text, number) || !(number >= 1.0)) return false;
+    const double bytes = std::ldexp(number, shift);
+    if (!(bytes < 1.8e19)) return false;  // past uint64_t
+    out = uint64_t(bytes);
+    return true;
+}
+
 bool parse_brdf(const std::string& spec, ndfb_fit_options& fit)
 {
     if (spec == "lambert") {
@@ -202,6 +219,7 @@ int run_bake(ndfb_context ctx, const Args& args)
         else if (name == "--tolerance" && numeric) fit.tolerance = float(number);
         else if (name == "--threads" && numeric && number >= 0) fit.threads = uint32_t(number);
         else if (name == "--levels" && numeric && number >= 0 && number == double(int(number))) fit.max_levels = uint32_t(number);
+        else if (name == "--max-memory" && parse_bytes(value, fit.max_memory_bytes)) {}
         else if (name == "--brdf" && parse_brdf(value, fit)) {}
         else if (name == "--convention" && (value == "opengl" || value == "directx"))
             decode.convention = value == "opengl" ? NDFB_CONVENTION_OPENGL : NDFB_CONVENTION_DIRECTX;

@@ -482,6 +482,11 @@ TEST_F(BakeApi, CommandLineReportsFailuresInOneLineWithAnExitCode)
     EXPECT_EQ(r.exit_code, 3) << r.err;
     r = run_cli("bake " + path("w.png") + " --out " + path("o") + " --max-lobes 9", err);
     EXPECT_EQ(r.exit_code, 1) << r.err;
+    r = run_cli("bake " + path("w.png") + " --out " + path("o") + " --max-memory 64K", err);
+    EXPECT_EQ(r.exit_code, 2) << r.err;  // over the memory allowed: a bad input for this machine
+    EXPECT_NE(r.err.find("--max-memory"), std::string::npos) << r.err;
+    EXPECT_EQ(run_cli("bake " + path("w.png") + " --out " + path("o") + " --max-memory 1G --quiet", err).exit_code, 0);
+    EXPECT_EQ(run_cli("bake " + path("w.png") + " --out " + path("o") + " --max-memory 12X", err).exit_code, 1);
     r = run_cli("frobnicate", err);
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_FALSE(std::filesystem::exists(path("out2")) && !listing(path("out2")).empty());

@@ -114,7 +114,8 @@ void check_memory_budget(const MemoryEstimate& estimate, uint64_t requested_limi
                     std::to_string(slots) + " lobe slots needs an estimated " + std::to_string(peak) + " bytes (" +
                     human_bytes(peak) + ") at its peak, over the memory limit of " + std::to_string(limit) +
                     " bytes (" + human_bytes(limit) + (requested_limit > 0 ? "" : ", the physical memory") +
-                    "); use fewer lobes or a smaller map, or allow more memory (max_memory_bytes)");
+                    "); use fewer lobes or a smaller map, or allow more memory (max_memory_bytes; "
+                    "ndfbake bake --max-memory)");
 }
 
 uint64_t process_peak_memory()
