@@ -782,6 +782,20 @@ TEST_F(IoTest, FailedAtomicWriteRemovesTheTempFileAndKeepsTheOldOne)
     EXPECT_EQ(files_in(dir_), std::vector<std::string>{"lobe.exr"});
 }
 
+TEST_F(IoTest, AFailedWriteNamesTheFileAskedForNotItsTemporary)
+{
+    // OpenImageIO names the file it was given, the temporary: the error says the user's file.
+    const std::string file = path("missing") + "/normal.png";
+    try {
+        write_normal_map(file, synthesize(Pattern::bumps, 4, 4));
+        FAIL() << "wrote into a missing folder";
+    } catch (const Error& e) {
+        const std::string message = e.what();
+        EXPECT_EQ(message.find(".tmp-"), std::string::npos) << message;
+        EXPECT_NE(message.find("cannot write '" + file + "'"), std::string::npos) << message;
+    }
+}
+
 TEST_F(IoTest, EnsureWritableDirectoryCreatesMissingFolders)
 {
     const fs::path nested = dir_ / "a" / "b" / "c";

@@ -55,6 +55,10 @@ void write_file_atomic(const std::string& final_path,
                        const std::function<void(const std::string& temp_path)>& writer)
 {
     const std::string temp_path = temp_path_for(final_path);
+    const auto remove_temp = [&] {
+        std::error_code ignored;
+        fs::remove(temp_path, ignored);
+    };
     try {
         writer(temp_path);
         flush_to_disk(temp_path, final_path);
@@ -62,9 +66,15 @@ void write_file_atomic(const std::string& final_path,
         fs::rename(temp_path, final_path, ec);
         if (ec)
             throw Error(Status::io_error, "cannot write '" + final_path + "': " + ec.message());
+    } catch (const Error& e) {
+        remove_temp();
+        // Writers' libraries name the file they were given: the user asked for final_path.
+        std::string message = e.what();
+        for (size_t at = message.find(temp_path); at != std::string::npos; at = message.find(temp_path, at))
+            message.replace(at, temp_path.size(), final_path);
+        throw Error(e.status(), message);
     } catch (...) {
-        std::error_code ignored;
-        fs::remove(temp_path, ignored);
+        remove_temp();
         throw;
     }
 }
