@@ -175,23 +175,29 @@ def test_normal_map_not_from_an_image_texture():
     _case(run)
 
 
+def _mix_in_a_normal_mapped_principled(material, image_path):
+    """A second Principled BSDF, mixed into the output, whose Normal comes from `image_path`
+    through its own Image datablock (loaded again even where the file is loaded already)."""
+    tree = material.node_tree
+    second = tree.nodes.new("ShaderNodeBsdfPrincipled")
+    mix = tree.nodes.new("ShaderNodeMixShader")
+    tree.links.new(tree.nodes["Principled BSDF"].outputs[0], mix.inputs[1])
+    tree.links.new(second.outputs[0], mix.inputs[2])
+    tree.links.new(mix.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+    tex = tree.nodes.new("ShaderNodeTexImage")
+    tex.image = bpy.data.images.load(image_path, check_existing=False)
+    tex.image.colorspace_settings.name = "Non-Color"
+    nm = tree.nodes.new("ShaderNodeNormalMap")
+    tree.links.new(tex.outputs["Color"], nm.inputs["Color"])
+    tree.links.new(nm.outputs["Normal"], second.inputs["Normal"])
+    bpy.ops.wm.save_mainfile()
+
+
 def test_two_normal_map_images():
     def run(directory):
         material = h.baked_scene(directory)
         other = h.write_normal_map(os.path.join(directory, "other.png"), "fbm", 32)
-        tree = material.node_tree
-        second = tree.nodes.new("ShaderNodeBsdfPrincipled")
-        mix = tree.nodes.new("ShaderNodeMixShader")
-        tree.links.new(tree.nodes["Principled BSDF"].outputs[0], mix.inputs[1])
-        tree.links.new(second.outputs[0], mix.inputs[2])
-        tree.links.new(mix.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
-        tex = tree.nodes.new("ShaderNodeTexImage")
-        tex.image = bpy.data.images.load(other)
-        tex.image.colorspace_settings.name = "Non-Color"
-        nm = tree.nodes.new("ShaderNodeNormalMap")
-        tree.links.new(tex.outputs["Color"], nm.inputs["Color"])
-        tree.links.new(nm.outputs["Normal"], second.inputs["Normal"])
-        bpy.ops.wm.save_mainfile()
+        _mix_in_a_normal_mapped_principled(material, other)
         expect_refused(material, "SEVERAL_IMAGES", ["2 normal-map images", "normal.png", "other.png"], directory)
     _case(run)
 
@@ -201,23 +207,11 @@ def test_one_file_through_two_image_datablocks():
     def run(directory):
         from ndfbake import bake
         material = h.baked_scene(directory)
-        tree = material.node_tree
-        second = tree.nodes.new("ShaderNodeBsdfPrincipled")
-        mix = tree.nodes.new("ShaderNodeMixShader")
-        tree.links.new(tree.nodes["Principled BSDF"].outputs[0], mix.inputs[1])
-        tree.links.new(second.outputs[0], mix.inputs[2])
-        tree.links.new(mix.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
-        tex = tree.nodes.new("ShaderNodeTexImage")
-        tex.image = bpy.data.images.load(os.path.join(directory, "normal.png"), check_existing=False)
-        tex.image.colorspace_settings.name = "Non-Color"
+        _mix_in_a_normal_mapped_principled(material, os.path.join(directory, "normal.png"))
         h.expect(len(bpy.data.images) == 2, "images: %s" % [i.name for i in bpy.data.images])
-        nm = tree.nodes.new("ShaderNodeNormalMap")
-        tree.links.new(tex.outputs["Color"], nm.inputs["Color"])
-        tree.links.new(nm.outputs["Normal"], second.inputs["Normal"])
-        bpy.ops.wm.save_mainfile()
         result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
-        h.expect(len([n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup"]) == 2,
-                 "one group per Principled BSDF: %s" % result.summary)
+        groups = [n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeGroup"]
+        h.expect(len(groups) == 2, "one group per Principled BSDF: %s" % result.summary)
     _case(run)
 
 

@@ -424,7 +424,8 @@ TEST_F(BakeApi, CancelReachesTheFitOfAOneTexelMap)
     // A 1×1 map has no level to fit: its only progress call is the fit's last, which may cancel too.
     const float pixel[3] = {0.5f, 0.5f, 1.0f};
     ndfb_normal_map map = nullptr;
-    ASSERT_EQ(ndfb_normal_map_from_pixels(ctx_, pixel, 3, 1, 1, 3, 0, &decode_, &map), NDFB_OK) << ndfb_last_error(ctx_);
+    ASSERT_EQ(ndfb_normal_map_from_pixels(ctx_, pixel, 3, 1, 1, 3, 0, &decode_, &map), NDFB_OK)
+        << ndfb_last_error(ctx_);
     fit_.progress = +[](void*, const char*, float) -> int { return 1; };
     ndfb_pyramid pyramid = nullptr;
     EXPECT_EQ(ndfb_fit(ctx_, map, &fit_, &pyramid), NDFB_ERROR_CANCELLED);
