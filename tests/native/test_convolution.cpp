@@ -58,6 +58,20 @@ TEST(ConvolutionRules, GgxSphereIntegralIsClosedForm)
     }
 }
 
+TEST(ConvolutionRules, GgxStaysExactAtItsPeakForTheSmallestRoughness)
+{
+    // D(1) = 1/(πα²), α = roughness²: in float, c²(α² − 1) + 1 rounded to 0 below roughness 0.013.
+    for (float roughness : {0.01f, 0.012f, 0.02f, 0.05f, 0.3f}) {  // 0.01: the smallest accepted
+        const double alpha = double(roughness) * double(roughness);
+        const double peak = 1.0 / (3.141592653589793 * alpha * alpha);
+        const float value = BaseBrdf::ggx(roughness).eval(1.0f);
+        EXPECT_NEAR(value / peak, 1.0, 1e-5) << roughness;
+        // Just off the peak too (c in float resolution): the double formula at the same c.
+        const float c = std::nextafter(1.0f, 0.0f);
+        EXPECT_NEAR(BaseBrdf::ggx(roughness).eval(c) / ggx(double(c), alpha), 1.0, 1e-3) << roughness;
+    }
+}
+
 TEST(ConvolutionRules, BlinnPhongAndBeckmannRulesAreAccurateForSharpLobes)
 {
     // Eq. 20 and eq. 21 assume κ large (sinh κ ≈ e^κ/2 and small angles, §7.2): within 3% for

@@ -78,7 +78,8 @@ float ndfb_ggx_d(float cos_theta, float alpha)
 {
     if (cos_theta <= 0.0) return 0.0;
     float a2 = alpha * alpha;
-    float d = cos_theta * cos_theta * (a2 - 1.0) + 1.0;
+    // c²(α² − 1) + 1, written so that α² − 1 cannot round to −1 at small α (d = 0 at the peak).
+    float d = a2 * cos_theta * cos_theta + (1.0 - cos_theta) * (1.0 + cos_theta);
     return a2 / (NDFB_PI * d * d);
 }
 
