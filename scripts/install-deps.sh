@@ -2,7 +2,9 @@
 # Installs what ndfbake needs on Debian 12 from Debian's own packages. Run as root (or via sudo).
 set -euo pipefail
 packages=(build-essential cmake pkg-config libopenimageio-dev libopenexr-dev openimageio-tools
-          libgtest-dev python3 blender assimp-testmodels xvfb
+          libgtest-dev python3 blender assimp-testmodels
+          xvfb xauth             # xvfb-run (the window, viewport and GLSL tests); xvfb only recommends
+                                 # xauth, and recommends are not installed
           python3-numpy          # the add-on's level of detail, the demo's and tests' image error (Debian's
                                  # Blender does not depend on it)
           python3-matplotlib     # examples/plot_bench.py, the bench chart
