@@ -18,8 +18,8 @@ have_libfuzzer() {
   local probe
   probe=$(mktemp -d)
   printf 'extern "C" int LLVMFuzzerTestOneInput(const unsigned char*, unsigned long) { return 0; }\n' > "$probe/p.cpp"
-  clang++ -fsanitize=fuzzer,address "$probe/p.cpp" -o "$probe/p" >/dev/null 2>&1
-  local ok=$?
+  local ok=0
+  clang++ -fsanitize=fuzzer,address "$probe/p.cpp" -o "$probe/p" >/dev/null 2>&1 || ok=$?  # set -e: no exit
   rm -rf "$probe"
   return $ok
 }
