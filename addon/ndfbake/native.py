@@ -129,7 +129,8 @@ def _encode(path):
 
 
 def candidate_paths():
-    here = os.path.dirname(os.path.abspath(__file__))
+    # realpath: an add-on folder linked into the user scripts path finds its checkout's build.
+    here = os.path.dirname(os.path.realpath(__file__))
     paths = []
     env = os.environ.get(ENV_VARIABLE)
     if env:

@@ -11,7 +11,8 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 - In separate Blender processes the installed add-on gets no library, a file that is not a
   library, a library of another ABI (compiled here when a C compiler is available), and a Python
   without NumPy (Debian's Blender does not depend on it): the add-on still enables, the panel
-  draws the one message, the operator reports it; no traceback.
+  draws the one message, the operator reports it; no traceback. The checkout's add-on folder
+  linked into the scripts path looks for the checkout's build/native/libndfbake.so.
 """
 import os
 import shutil
@@ -117,8 +118,17 @@ class FakeLayout:
 
 def child_case(case):
     """Runs inside the child Blender: the add-on installed in BLENDER_USER_SCRIPTS has a bad
-    library. Prints 'CHILD OK <message>' when every check holds."""
+    library (or, "linked", is this checkout's folder linked there). Prints 'CHILD OK <message>'
+    when every check holds."""
     import addon_utils
+    if case == "linked":
+        module = addon_utils.enable("ndfbake", default_set=True, handle_error=None)
+        assert module is not None, "the linked add-on did not enable"
+        repo = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))
+        built = os.path.join(repo, "build", "native", "libndfbake.so")
+        assert built in module.native.candidate_paths(), module.native.candidate_paths()
+        print("CHILD OK looks for " + built)
+        return
     if case == "numpy":
         sys.modules["numpy"] = None  # `import numpy` now raises ImportError: a Blender without NumPy
     module = addon_utils.enable("ndfbake", default_set=True, handle_error=None)
@@ -154,14 +164,18 @@ def _fake_abi_library(path):
 
 def test_unusable_library_gives_one_message():
     zip_path = _zip()
-    for case in ("missing", "broken", "abi", "numpy"):
+    for case in ("missing", "broken", "abi", "numpy", "linked"):
         with h.scratch_dir("ndfb-scripts-") as scripts:
             addons = os.path.join(scripts, "addons")
             os.makedirs(addons)
-            with zipfile.ZipFile(zip_path) as z:
-                z.extractall(addons)
+            if case == "linked":  # the checkout's add-on folder linked in: it finds the checkout's build
+                repo = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+                os.symlink(os.path.join(repo, "addon", "ndfbake"), os.path.join(addons, "ndfbake"))
+            else:
+                with zipfile.ZipFile(zip_path) as z:
+                    z.extractall(addons)
             library = os.path.join(addons, "ndfbake", "libndfbake.so")
-            if case != "numpy":  # that case keeps the library and loses NumPy (child_case)
+            if case not in ("numpy", "linked"):  # numpy keeps the library and loses NumPy (child_case)
                 os.remove(library)
             if case == "broken":
                 with open(library, "wb") as f:
