@@ -587,6 +587,12 @@ def _arguments():
 def main():
     args = _arguments()
     import_addon(args.library)
+    from ndfbake import native
+    try:
+        native.load()
+    except native.LibraryError as e:  # one line, as the add-on's panel says it
+        print("demo_scene.py: %s" % e, file=sys.stderr)
+        return 1
     report = run_demo(args.out, args.width, args.height, args.reference_samples, args.samples,
                       args.eevee_samples, args.eevee_reference_samples)
     failed = [b for b in report["bakes"] if "error" in b]
@@ -594,7 +600,13 @@ def main():
 
 
 if __name__ == "__main__":
-    code = main()
+    try:
+        code = main()
+    except Exception:  # a bug: Blender would print it and still exit 0
+        import traceback
+        traceback.print_exc()
+        code = 1
     sys.stdout.flush()
+    sys.stderr.flush()
     if code:
         os._exit(code)
