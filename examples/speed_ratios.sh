@@ -16,9 +16,9 @@ if [ -z "$map" ]; then
   "$ndfbake" synth fbm --size 2048 --out "$map"
 fi
 
-seconds() {  # runs "$@" quietly, prints its wall time
+seconds() {  # runs "$@" (its errors shown, a failure ends the script), prints its wall time
   local start=$EPOCHREALTIME
-  "$@" >/dev/null 2>&1
+  "$@" >/dev/null || return $?
   awk -v a="$start" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.3f", b - a }'
 }
 
