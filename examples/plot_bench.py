@@ -41,6 +41,11 @@ def main():
     parser.add_argument("--map", default=None, help="only this map's rows")
     args = parser.parse_args()
     table = load(args.csv, args.map)
+    if not table:
+        with open(args.csv) as f:
+            maps = sorted({row["map"] for row in csv.DictReader(f)})
+        raise SystemExit("plot_bench.py: no rows%s in %s (its maps: %s)" % (
+            " for map %r" % args.map if args.map else "", args.csv, ", ".join(maps) or "none"))
     fig, axes = plt.subplots(1, len(table), figsize=(6.5 * len(table), 5.5), squeeze=False)
     for ax, (brdf, methods) in zip(axes[0], sorted(table.items())):
         points = {m: (max(s, 1e-4), e / n) for m, (s, e, n) in methods.items()}
