@@ -2,15 +2,18 @@
 (bake.py, the same code the Bake button runs).
 
     blender -b scene.blend --python examples/bake_blend.py -- [--material NAME ...]
-            [--max-lobes N] [--tolerance T] [--refine] [--level-of-detail scene|renderer] [--pack] [--revert] [--no-save]
+            [--max-lobes N] [--tolerance T] [--refine] [--level-of-detail scene|renderer] [--pack] [--revert]
+            [--no-save | --delete-unused]
 
 Without --material it bakes every material the scene needs: those with a tangent-space normal
 map (Image Texture -> Normal Map -> Principled BSDF) on objects the scene renders. Each material's
 lobe textures go to //<material>.ndfbake/ beside the .blend. One line per material is printed,
 then a summary; the .blend is saved afterwards (its node groups refer to the textures by relative
-path) unless --no-save; then the lobe folders that no saved .blend uses any more (replaced by a
-re-bake, reverted) are deleted. --revert undoes earlier bakes instead (nodes restored, folders
-deleted as just said).
+path), and the lobe folders this run wrote that the saved file does not use are deleted. With
+--no-save nothing is saved and this run's lobe folders go when Blender exits (a dry run).
+--revert undoes earlier bakes instead (nodes restored). Folders of earlier runs stay, since other
+.blend files may use them: --delete-unused also deletes, after the save, the lobe folders beside
+the .blend that it does not use (as the panel's Delete Unused Lobe Folders).
 
 Exit status: 0 when every material succeeded; 1 when any failed (a failed material and its files
 are left exactly as they were; the others are still baked and saved), when the .blend could not
@@ -76,8 +79,25 @@ def _arguments():
                              "renderer (EEVEE's own MIP levels)")
     parser.add_argument("--pack", action="store_true", help="also pack the lobe textures into the .blend")
     parser.add_argument("--revert", action="store_true", help="undo earlier bakes instead of baking")
-    parser.add_argument("--no-save", action="store_true", help="do not save the .blend afterwards")
+    saving = parser.add_mutually_exclusive_group()
+    saving.add_argument("--no-save", action="store_true",
+                        help="do not save the .blend afterwards (this run's lobe folders go at exit: a dry run)")
+    saving.add_argument("--delete-unused", action="store_true",
+                        help="after saving, delete the lobe folders beside the .blend that it does not use "
+                             "(other .blend files there may still use them)")
     return parser.parse_args(argv)  # exits with status 2 on bad usage
+
+
+def _delete_unused(lobe_folders):
+    """--delete-unused: the folders beside the saved .blend that it does not use. Returns 0 or 1."""
+    folders = lobe_folders.unused_folders()
+    _, left = lobe_folders.delete_folders(folders)
+    print("deleted %d unused lobe folder%s%s" % (len(folders), "" if len(folders) == 1 else "s",
+                                                  ": " + ", ".join(os.path.basename(f) for f in folders)
+                                                  if folders else ""))
+    for what in left:
+        print("FAILED deleting %s" % what)
+    return 1 if left else 0
 
 
 def main():
@@ -100,7 +120,7 @@ def main():
         materials = bake.materials_needing_bake(bpy.context.scene)
     if not materials:
         print("bake_blend: nothing to %s in %s" % ("revert" if args.revert else "bake", bpy.data.filepath))
-        return 0
+        return _delete_unused(addon.lobe_folders) if args.delete_unused else 0
 
     settings = bake.BakeSettings(max_lobes=args.max_lobes, tolerance=args.tolerance, refine=args.refine,
                                  pack=args.pack, level_of_detail=args.level_of_detail.upper())
@@ -129,6 +149,8 @@ def main():
             return 1
         # What closing the file does (also at exit): the lobe folders no saved .blend uses go.
         addon.lobe_folders.delete_unused_folders()
+    if args.delete_unused and _delete_unused(addon.lobe_folders):  # the file on disk is the one in memory
+        failures += 1
     print("%s %d of %d materials in %.1f s%s" % ("reverted" if args.revert else "baked", changed, len(materials),
                                                time.perf_counter() - start,
                                                ", saved " + bpy.data.filepath if changed and not args.no_save else ""))

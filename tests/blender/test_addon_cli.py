@@ -10,7 +10,8 @@ Space is sRGB), and an unrendered "Hidden" one. The script runs in a separate `b
   it); --revert restores Good exactly (the folders stay for the same reason);
 - an unknown material and --max-lobes 0 exit 2, changing nothing;
 - a bake whose .blend cannot be saved exits 1 with a FAILED line, and its lobe folder, which no
-  saved file uses, goes.
+  saved file uses, goes;
+- --delete-unused deletes the earlier runs' folders the file does not use (not with --no-save).
 """
 import json
 import os
@@ -84,6 +85,15 @@ def test_command_line_bake_and_revert():
         h.expect(os.path.getmtime(blend) == mtime, "the .blend changed although its save failed")
         h.expect(sorted(f for f in os.listdir(directory) if ".ndfbake" in f) == ["Good.ndfbake", "Good~2.ndfbake"],
                  "the unsaved bake's folder was left: %s" % os.listdir(directory))
+
+        # The folders of earlier runs go only when asked; never together with --no-save.
+        os.rmdir(blend + "@")
+        code, out = h.run_bake_blend(blend, "--delete-unused", "--no-save")
+        h.expect(code == 2, "--delete-unused with --no-save: exit %d\n%s" % (code, out))
+        code, out = h.run_bake_blend(blend, "--revert", "--delete-unused")
+        h.expect(code == 0 and "deleted 2 unused lobe folders: Good.ndfbake, Good~2.ndfbake" in out,
+                 "--delete-unused: exit %d\n%s" % (code, out))
+        h.expect(not [f for f in os.listdir(directory) if ".ndfbake" in f], "left: %s" % os.listdir(directory))
 
 
 if __name__ == "__main__":
