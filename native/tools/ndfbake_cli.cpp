@@ -351,6 +351,11 @@ int main(int argc, char** argv)
         std::printf("ndfbake %s\n", ndfb_version());
         return 0;
     }
+    for (int i = 2; i < argc; ++i)  // `ndfbake bake --help`: the same usage, for every command
+        if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
+            std::fputs(kUsage, stdout);
+            return 0;
+        }
     Args args;
     std::string error;
     if (!parse_args(argc, argv, 2, args, error)) return fail(1, error);

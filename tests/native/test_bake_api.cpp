@@ -466,6 +466,8 @@ TEST_F(BakeApi, CommandLineReportsFailuresInOneLineWithAnExitCode)
 {
     const std::string err = path("stderr.txt");
     EXPECT_EQ(run_cli("--help", err).exit_code, 0);
+    EXPECT_EQ(run_cli("bake --help", err).exit_code, 0);
+    EXPECT_EQ(run_cli("bench --help", err).exit_code, 0);
     EXPECT_EQ(run_cli("synth weave --size 32 --out " + path("w.png"), err).exit_code, 0);
     EXPECT_EQ(run_cli("bake " + path("w.png") + " --out " + path("out") + " --quiet", err).exit_code, 0);
     EXPECT_EQ(run_cli("info " + path("out/level01_lobe0.exr"), err).exit_code, 0);
