@@ -241,10 +241,13 @@ TEST(SingleLobeBaselines, ToksvigMatchesHisExponentAndTheBeckmannWidening)
     EXPECT_NEAR(eval_at(*pyramid, 1, bp, {float(std::sin(off)), 0, float(std::cos(off))}),
                 (s_prime + 1.0) / (2.0 * kPi) * std::pow(std::cos(off), s_prime), 1e-4);
     // Beckmann m = 0.25 (eq. 21): m'² = m² + 2σ², σ² = (1 − R)/R = 0.1547005, so m'² = 0.371901
-    // and D(ẑ) = 1/(π m'²) = 0.855899.
+    // (m' = 0.609837), and the amplitude keeping the sphere integral I(m) = 1 + (√π/2) m erfcx(1/m):
+    // I(0.25) = 1.030353, I(m') = 1.162199, A = 0.886555; D(ẑ) = A/(π m'²) = 0.758802.
     const double m2 = 0.0625 + 2.0 * (1.0 - kFacetR) / kFacetR;
     EXPECT_NEAR(m2, 0.371901, 1e-6);
-    EXPECT_NEAR(eval_at(*pyramid, 1, BaseBrdf::beckmann(0.25f), {0, 0, 1}), 1.0 / (kPi * m2), 1e-4);
+    EXPECT_NEAR(BaseBrdf::beckmann_sphere_integral(0.25) / BaseBrdf::beckmann_sphere_integral(std::sqrt(m2)),
+                0.886555, 1e-6);
+    EXPECT_NEAR(eval_at(*pyramid, 1, BaseBrdf::beckmann(0.25f), {0, 0, 1}), 0.886555 / (kPi * m2), 1e-4);
 }
 
 TEST(SingleLobeBaselines, SingleVmfUsesBanerjeesKappa)

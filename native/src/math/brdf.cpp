@@ -114,10 +114,11 @@ void ggx_many(std::span<const float> c, float alpha, float amplitude, std::span<
     }
 }
 
-// exp(−tan²θ/m²)/(π m² c⁴) and its derivative D (2/(m² c³) − 4/c), vectorized.
-void beckmann_many(std::span<const float> c, float m, std::span<float> value, std::span<float> slope)
+// amplitude · exp(−tan²θ/m²)/(π m² c⁴) and its derivative D (2/(m² c³) − 4/c), vectorized.
+void beckmann_many(std::span<const float> c, float m, float amplitude, std::span<float> value,
+                   std::span<float> slope)
 {
-    const float m2 = m * m;
+    const float m2 = m * m, scale = amplitude * kInvPi;
     const size_t n = c.size();
     const float* x = c.data();
     float* v = value.data();
@@ -127,7 +128,7 @@ void beckmann_many(std::span<const float> c, float m, std::span<float> value, st
         const bool lit = x[i] > kMinEvalManyCosine;
         const float cc = lit ? x[i] : 1.0f, c2 = cc * cc;
         const float falloff = lit ? fast_exp_nonpositive(-(1.0f - c2) / (c2 * m2)) : 0.0f;
-        v[i] = falloff > 0.0f ? falloff * kInvPi / (m2 * c2 * c2) : 0.0f;
+        v[i] = falloff > 0.0f ? falloff * scale / (m2 * c2 * c2) : 0.0f;
     }
     if (slope.empty()) return;
     float* d = slope.data();
@@ -232,7 +233,10 @@ ConvolvedLobe BaseBrdf::convolved(float kappa) const
         break;
     }
     case BrdfKind::beckmann:
-        lobe.parameter_ = std::sqrt(parameter_ * parameter_ + 2.0f / kappa);  // eq. 21
+        // Eq. 21, capped like GGX's: past m = 1 a Beckmann lobe piles up at the horizon instead
+        // of widening (relative error 354 at κ = 1e-3 uncapped); the amplitude keeps the integral.
+        lobe.parameter_ = std::min(kMaxBeckmannSlope, std::sqrt(parameter_ * parameter_ + 2.0f / kappa));
+        lobe.amplitude_ = float(beckmann_sphere_integral(parameter_) / beckmann_sphere_integral(lobe.parameter_));
         break;
     }
     return lobe;
@@ -255,7 +259,7 @@ float ConvolvedLobe::eval(float c) const
     }
     case BrdfKind::blinn_phong: return normalized_blinn_phong(c, parameter_);
     case BrdfKind::ggx: return amplitude_ * ggx_distribution(c, parameter_);
-    case BrdfKind::beckmann: return beckmann_distribution(c, parameter_);
+    case BrdfKind::beckmann: return amplitude_ * beckmann_distribution(c, parameter_);
     }
     return 0.0f;
 }
@@ -287,7 +291,7 @@ float ConvolvedLobe::slope(float c) const
     }
     case BrdfKind::beckmann: {  // D = exp(−tan²/m²)/(π m² c⁴): D' = D (2/(m² c³) − 4/c)
         if (c <= 0.0f) return 0.0f;
-        const float m2 = parameter_ * parameter_, d = beckmann_distribution(c, parameter_);
+        const float m2 = parameter_ * parameter_, d = amplitude_ * beckmann_distribution(c, parameter_);
         return d > 0.0f ? d * (2.0f / (m2 * c * c * c) - 4.0f / c) : 0.0f;  // 0 · ∞ where D underflows
     }
     }
@@ -299,7 +303,7 @@ void ConvolvedLobe::eval_many(std::span<const float> c, std::span<float> value, 
     switch (BrdfKind(kind_)) {
     case BrdfKind::blinn_phong: return blinn_phong_many(c, parameter_, value, slope);
     case BrdfKind::ggx: return ggx_many(c, parameter_, amplitude_, value, slope);
-    case BrdfKind::beckmann: return beckmann_many(c, parameter_, value, slope);
+    case BrdfKind::beckmann: return beckmann_many(c, parameter_, amplitude_, value, slope);
     case BrdfKind::lambert:  // a recurrence per cosine: no faster in bulk
         for (size_t i = 0; i < c.size(); ++i) {
             value[i] = eval(c[i]);
@@ -314,11 +318,22 @@ void BaseBrdf::eval_many(std::span<const float> c, std::span<float> value) const
     switch (kind_) {
     case BrdfKind::blinn_phong: return blinn_phong_many(c, parameter_, value, {});
     case BrdfKind::ggx: return ggx_many(c, parameter_ * parameter_, 1.0f, value, {});
-    case BrdfKind::beckmann: return beckmann_many(c, parameter_, value, {});
+    case BrdfKind::beckmann: return beckmann_many(c, parameter_, 1.0f, value, {});
     case BrdfKind::lambert:
         for (size_t i = 0; i < c.size(); ++i) value[i] = eval(c[i]);
         return;
     }
+}
+
+double BaseBrdf::beckmann_sphere_integral(double m)
+{
+    // With u = tan²θ: ∫ D dω = s ∫₀^∞ e^(−su) √(1 + u) du, s = 1/m², = 1 + (√π/2) m erfcx(1/m)
+    // where erfcx(x) = e^(x²) erfc(x); past x = 25 its asymptotic series (e^(x²) overflows later
+    // than erfc underflows, but both leave double's range near x = 26).
+    const double x = 1.0 / m;
+    const double erfcx = x < 25.0 ? std::exp(x * x) * std::erfc(x)
+                                  : (1.0 - 0.5 / (x * x) + 0.75 / (x * x * x * x)) / (x * std::sqrt(std::numbers::pi));
+    return 1.0 + 0.5 * std::sqrt(std::numbers::pi) * m * erfcx;
 }
 
 double BaseBrdf::ggx_sphere_integral(double alpha)

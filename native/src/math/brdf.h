@@ -33,7 +33,7 @@ private:
     friend class BaseBrdf;
     int kind_ = 0;
     float parameter_ = 0.0f;  // s' for Blinn-Phong, α' for GGX
-    float amplitude_ = 1.0f;  // GGX: the widened lobe's weight, see BaseBrdf::convolved
+    float amplitude_ = 1.0f;  // GGX, Beckmann: the widened lobe's weight, see BaseBrdf::convolved
     std::array<float, kLambertBands + 1> lambert_bands_{};
 };
 
@@ -72,7 +72,8 @@ public:
     //   relative L2 error at most 0.39 for κ ≥ 5 and every α in [0.02, 1] (0.31 for α ≤ 0.7; at
     //   α = 1 no wider lobe exists); up to 0.88 below, where the NDF is nearly uniform and no
     //   hemispherical GGX lobe has its shape. The error falls to 0.03 by κ = 1e5.
-    // - Beckmann: m'² = m² + 2/κ (eq. 21: σ'² = σ² + 1/(2κ) with m² = 4σ²); 5% error at κ = 50.
+    // - Beckmann: amplitude · D(c; m') with m'² = m² + 2/κ (eq. 21: σ'² = σ² + 1/(2κ) with m² = 4σ²;
+    //   5% error at κ = 50), m' ≤ 1 and amplitude = ∫D_m dω / ∫D_m' dω, as for GGX.
     // - Lambert: its Legendre series, every band scaled by the vMF's A_l(κ).
     // Shaders must apply the same rule: lobe_parameter() and lobe_amplitude() give it.
     ConvolvedLobe convolved(float kappa) const;
@@ -80,6 +81,8 @@ public:
     // ∫_{S²} D(ω·n) dω of the GGX distribution of slope scale α (not roughness):
     // 1 + α² artanh(k)/k with k = √(1 − α²), and 2 at α = 1.
     static double ggx_sphere_integral(double alpha);
+    // The same for the Beckmann distribution of RMS slope m: 1 + (√π/2) m e^(1/m²) erfc(1/m).
+    static double beckmann_sphere_integral(double m);
 
     // Angular standard deviation of the lobe in radians: how finely directions must sample it.
     float angular_width() const;
