@@ -12,8 +12,11 @@ namespace ndfbake {
 // κ below this is a uniform distribution to float precision (A(κ) ≈ κ/3 < 4e-4); it also keeps
 // the direction of a lobe meaningful in storage, where r = A(κ)·μ must not round to zero.
 inline constexpr float kKappaMin = 1e-3f;
-// κ at which identical normals saturate (R → 1 makes A⁻¹ diverge). 1e4 is a 0.6° spread: sharper
-// than any BRDF lobe we convolve with (Blinn-Phong s ≤ 1e4), and 1 − 1/κ is still exact in float.
+// κ at which identical normals saturate (R → 1 makes A⁻¹ diverge). 1e4 is a 0.6° spread and
+// 1 − 1/κ is still exact in float. It is not sharper than every BRDF the library accepts: the
+// convolution rules widen a capped lobe by 1/κ = 1e-4, which matters for GGX roughness ≲ 0.2,
+// Blinn-Phong s ≳ 1e3 and Beckmann m ≲ 0.1 (README, Open problems). The lobe files store a capped
+// lobe as |r| = 1, which the exported GLSL and the Blender node group shade unwidened.
 inline constexpr float kKappaMax = 1e4f;
 
 // A normalized vMF lobe scaled by its mixture weight: α · γ(n; μ, κ).
