@@ -214,6 +214,23 @@ TEST_F(TangentApi, SliverCornersOfHugeEdgesKeepFiniteWeights)
     }
 }
 
+TEST_F(TangentApi, SliverCornersOfTinyEdgesKeepUnitTangents)
+{
+    // Edges of 1e-12: |q1|²|q2|² underflows, and with it the small-angle sine of the thin corner;
+    // MikkTSpace still weights that corner by its angle (0.005 rad) and gives a unit tangent.
+    TestMesh m;
+    const float s = 1e-12f;
+    const uint32_t a = m.vertex({0, 0, 0}), b = m.vertex({s, 0, 0}), c = m.vertex({s, 0.005f * s, 0});
+    m.face({a, b, c}, {{{0, 0}}, {{1, 0}}, {{1, 0.005f}}}, kUp);
+    const ndfb_mesh v = view(m);
+    std::vector<float> tangents(3 * 4);
+    ASSERT_EQ(ndfb_tangents(ctx_, &v, 1, tangents.data(), tangents.size(), nullptr, 0), NDFB_OK) << error();
+    for (int corner = 0; corner < 3; ++corner) {
+        EXPECT_NEAR(tangents[corner * 4], 1.0f, 1e-6f) << "corner " << corner;  // +X, as dP/du points
+        EXPECT_EQ(tangents[corner * 4 + 3], 1.0f) << "corner " << corner;
+    }
+}
+
 TEST_F(TangentApi, TexelDensityIsTheSquareRootOfUVAreaOverWorldArea)
 {
     TestMesh m = unit_square();  // 2 x 2 world units mapped onto the unit UV square

@@ -322,6 +322,9 @@ private:
     }
 
     static constexpr float kSmallAngleCos = 0.9999f;  // below ~0.014 rad: asin(x) = x to 4e-5 relative
+    // |q1|²|q2|² below this takes the scalar path: the small-angle branch's |q1 × q2|² is at most
+    // this times sin² (≤ 2e-4 there), which must stay a normal float with digits to spare.
+    static constexpr float kMinSimdEdgeProduct = 1e-24f;
 
     // Exact square roots and divisions: the reference path, and the fallback for lengths so small
     // (below FLT_MIN squared) that the hardware inverse square root estimate is not usable.
@@ -376,8 +379,14 @@ private:
         auto risky = [&](__m128 x) {
             return _mm_or_ps(_mm_and_ps(_mm_cmpgt_ps(x, zero), _mm_cmplt_ps(x, tiny)), _mm_cmpnle_ps(x, huge));
         };
-        const __m128 overflowing = _mm_cmpnle_ps(_mm_mul_ps(l1, l2), huge);
-        if (_mm_movemask_ps(_mm_or_ps(_mm_or_ps(_mm_or_ps(risky(l1), risky(l2)), risky(lt)), overflowing)) & 7)
+        // And where it underflows (edges under about 1e-9): |q1 × q2|² then loses the thin corner's
+        // sine, and a weight of 0 left corners of 1e-12 edges without a tangent (found in review).
+        const __m128 product = _mm_mul_ps(l1, l2);
+        const __m128 overflowing = _mm_cmpnle_ps(product, huge);
+        const __m128 underflowing = _mm_and_ps(_mm_and_ps(_mm_cmpgt_ps(l1, zero), _mm_cmpgt_ps(l2, zero)),
+                                               _mm_cmplt_ps(product, _mm_set1_ps(kMinSimdEdgeProduct)));
+        if (_mm_movemask_ps(_mm_or_ps(_mm_or_ps(_mm_or_ps(risky(l1), risky(l2)), risky(lt)),
+                                      _mm_or_ps(overflowing, underflowing))) & 7)
             return false;
         const __m128 one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f), three_halves = _mm_set1_ps(1.5f);
         auto rsqrt = [&](__m128 x) {  // one Newton step; lanes with x == 0 give 0, like normalizing zero
