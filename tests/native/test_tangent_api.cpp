@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <limits>
 #include <set>
@@ -79,9 +80,11 @@ TEST_F(TangentApi, BadMeshesAreRefusedWithMessagesNamingTheElement)
 
     m = unit_square();
     ndfb_mesh v = view(m);
-    v.struct_size = 0;
-    EXPECT_EQ(ndfb_tangents(ctx_, &v, 0, out.data(), out.size(), nullptr, 0), NDFB_ERROR_INVALID_ARGUMENT);
-    EXPECT_NE(error().find("ndfb_mesh_init"), std::string::npos) << error();
+    for (uint32_t size : {0u, 4u, uint32_t(offsetof(ndfb_mesh, uv_domain))}) {  // too short to hold every field
+        v.struct_size = size;
+        EXPECT_EQ(ndfb_tangents(ctx_, &v, 0, out.data(), out.size(), nullptr, 0), NDFB_ERROR_INVALID_ARGUMENT) << size;
+        EXPECT_NE(error().find("ndfb_mesh_init"), std::string::npos) << error();
+    }
 
     v = view(m);
     out.assign(15, 0.0f);

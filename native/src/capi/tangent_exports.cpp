@@ -2,6 +2,7 @@
 // native/src/tangent/.
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -34,7 +35,9 @@ AttributeDomain to_domain(ndfb_domain d, const char* what)
 MeshInput mesh_input(const ndfb_mesh* m, NgonPolicy ngons)
 {
     require(m != nullptr, "mesh is null");
-    require(m->struct_size >= sizeof(uint32_t) && m->struct_size <= sizeof(ndfb_mesh),
+    // Every field of ABI 1's ndfb_mesh is needed: a shorter struct cannot be read in full.
+    require(m->struct_size >= offsetof(ndfb_mesh, uv_domain) + sizeof(m->uv_domain) &&
+                m->struct_size <= sizeof(ndfb_mesh),
             "mesh.struct_size is not set: call ndfb_mesh_init first");
     require(m->face_count > 0, "the mesh has no faces");
     require(m->vertex_count > 0, "the mesh has no vertices");
