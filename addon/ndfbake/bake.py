@@ -297,6 +297,7 @@ def _commit_pending(job):
                         % (job.material_name, job.final_dir, e.strerror)) from None
     job.out_dir = job.final_dir
     lobe_folders.created(job.final_dir)
+    lobe_folders.filled(job.folder)
     lobe_folders.release(job.final_dir)
 
 

@@ -22,8 +22,11 @@ either. So only a background Blender (scripts, render farms) deletes this sessio
 folders, when the file is closed (another file opened, quit) or through delete_unused_folders().
 Otherwise a folder stays after a Revert or a re-bake; the Revert report names it, and the panel's
 "Delete Unused Lobe Folders" (unused_folders) lists the folders beside the .blend that this file
-does not use, for the user to delete once no other .blend needs them. Only the files a bake
-writes are deleted, then the folder if it is empty.
+does not use, neither as it is now nor as it was last opened or saved (a re-bake not saved yet
+leaves the saved file using the old folder), for the user to delete once no other .blend needs
+them. Only the files a bake writes are deleted, then the folder if it is empty. A .blend written
+by a script with bpy.data.libraries.write is no save to Blender's handlers: save the file (or keep
+its folders) before the session closes, or a background session deletes folders it uses.
 """
 import atexit
 import hashlib
@@ -72,11 +75,12 @@ def record_folder(rec):
     """The absolute folder of a bake: where its lobe images' files are (Blender remaps image paths
     when the .blend is saved elsewhere; the record's relative 'folder' it does not), else the
     record's folder."""
-    for name in rec.get("images", []):
-        image = bpy.data.images.get(name)
+    images, folder = rec.get("images"), rec.get("folder")  # a damaged record may hold anything
+    for name in images if isinstance(images, list) else []:
+        image = bpy.data.images.get(name) if isinstance(name, str) else None
         if image is not None and image.filepath:
             return os.path.dirname(material_scan.image_file_path(image))
-    return os.path.normpath(bpy.path.abspath(rec["folder"])) if rec.get("folder") else ""
+    return os.path.normpath(bpy.path.abspath(folder)) if isinstance(folder, str) and folder else ""
 
 
 def folder_users(folder, but=None):
@@ -92,6 +96,10 @@ def folder_users(folder, but=None):
 # ---- new folders ---------------------------------------------------------------------------------
 
 _reserved = set()  # keys of the folders of prepared bakes not yet finished or discarded
+# Relative names ('//…ndfbake', case-folded) this session's bakes filled: never handed out again in
+# the session, since an undo step may still hold image paths that name them relative to where the
+# .blend was then (Ctrl-Z after a Save As elsewhere brings back the paths from before the remap).
+_filled = set()
 
 
 def _taken_on_disk(absolute):
@@ -112,7 +120,8 @@ def new_folder(material):
     for version in range(1, MAX_FOLDER_VERSIONS + 1):
         relative = "//" + folder_name(material.name, version)
         absolute = os.path.normpath(bpy.path.abspath(relative))
-        if _key(absolute) not in _reserved and not _taken_on_disk(absolute) and not folder_users(absolute):
+        if _key(absolute) not in _reserved and relative.casefold() not in _filled and \
+                not _taken_on_disk(absolute) and not folder_users(absolute):
             _reserved.add(_key(absolute))
             return relative, absolute
     raise FolderError("%d lobe folders of '%s' are in the way beside the .blend (%s …): remove those no .blend "
@@ -123,10 +132,19 @@ def release(absolute):
     _reserved.discard(_key(absolute))
 
 
+def filled(relative):
+    """A bake's files went into `relative` (new_folder's name): not to be handed out again."""
+    _filled.add(relative.casefold())
+
+
 # ---- the session's folders: a background Blender deletes those no save used at close ------------
 
 _created = {}      # key: absolute path of each folder this session's bakes wrote
 _saved = set()     # keys of the folders something used while this session saved a .blend
+# Keys of the folders the file used when it was last opened or saved: the .blend on disk may use
+# them whatever the file holds now (a re-bake not saved yet). None: no load or save seen yet.
+# A Save Copy counts as a save too (Blender 3.4's handlers cannot tell them apart).
+_on_disk = None
 
 
 def created(folder):
@@ -163,6 +181,8 @@ def note_save():
         print("ndfbake: keeping every lobe folder of this session (%s: %s)" % (type(e).__name__, e))
         referenced = set(_created)
     _saved.update(referenced & set(_created))
+    global _on_disk
+    _on_disk = referenced
 
 
 def delete_unused_folders():
@@ -199,9 +219,13 @@ def unused_folders():
     if not bpy.data.filepath:
         return []
     parent = os.path.dirname(os.path.abspath(bpy.data.filepath))
-    used = _referenced()
+    used = _referenced() | (_on_disk or set())
+    try:
+        names = sorted(os.listdir(parent))
+    except OSError:  # the .blend's folder went away: nothing beside it to list
+        return []
     folders = []
-    for name in sorted(os.listdir(parent)):
+    for name in names:
         path = os.path.join(parent, name)
         if not os.path.isdir(path):
             continue
@@ -263,13 +287,24 @@ def _on_save_post(*_):
 @persistent
 def _on_load_pre(*_):
     _close_session()
+    _filled.clear()  # the undo steps that could name them went with the file
+
+
+@persistent
+def _on_load_post(*_):
+    global _on_disk
+    try:
+        _on_disk = _referenced()
+    except Exception as e:  # a handler must not raise into Blender's file loading
+        print("ndfbake: could not list the lobe folders of %s (%s: %s)" % (bpy.data.filepath, type(e).__name__, e))
+        _on_disk = None
 
 
 def _on_exit():
     _close_session()
 
 
-_HANDLERS = (("save_post", _on_save_post), ("load_pre", _on_load_pre))
+_HANDLERS = (("save_post", _on_save_post), ("load_pre", _on_load_pre), ("load_post", _on_load_post))
 
 
 def _remove_our_handlers():

@@ -4,7 +4,7 @@ import textwrap
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
 
-from . import bake, material_scan, native, nodes, operators
+from . import bake, lobe_folders, material_scan, native, nodes, operators
 
 
 class NDFBakeSettings(bpy.types.PropertyGroup):
@@ -99,8 +99,10 @@ class NDFBAKE_PT_material(bpy.types.Panel):
 
         if baked:
             rec = material_scan.record(material)
-            _wrapped(layout.box(), "Baked into %s: %s" % (rec.get("folder", ""), rec.get("summary", "")),
-                     icon="CHECKMARK")
+            # Where the images are, as a path from the .blend: Save As and appending move them.
+            folder = lobe_folders.record_folder(rec)
+            _wrapped(layout.box(), "Baked into %s: %s" % (bpy.path.relpath(folder) if folder else "",
+                                                           rec.get("summary", "")), icon="CHECKMARK")
             _wrapped(layout, "The ndfbake node now holds the material's inputs (colour, roughness, ...): edit "
                              "them there; the original Principled BSDF is kept, bypassed, for Revert.", icon="INFO")
         _wrapped(layout, nodes.osl_status()[1], icon="INFO")

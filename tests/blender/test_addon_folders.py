@@ -213,11 +213,29 @@ def test_save_as_elsewhere_keeps_the_textures():
         h.expect(os.path.isdir(folder), "Save As deleted the folder the moved .blend's images use")
         material = bpy.data.materials["Bumpy"]
         _images_load(material)
+        # A re-bake here must not take '//Bumpy.ndfbake' (moved/Bumpy.ndfbake): Ctrl-Z brings back
+        # the image paths from before Save As remapped them, which name it relative to the .blend.
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        h.expect(result.folder == "//Bumpy~2.ndfbake", "the re-bake after Save As went to %s" % result.folder)
         reverted, _ = bake.revert(material)
-        h.expect(os.path.normpath(reverted) == folder, "revert released %s, not %s" % (reverted, folder))
+        h.expect(os.path.normpath(reverted) == os.path.join(directory, "moved", "Bumpy~2.ndfbake"),
+                 "revert released %s" % reverted)
         bpy.ops.wm.save_mainfile()
         h.close_file()
-        h.expect(os.path.isdir(folder), "the folder moved/scene.blend was saved with is gone")
+        h.expect(os.path.isdir(folder), "the folder the first save of moved/scene.blend used is gone")
+
+
+def test_a_damaged_record_on_another_material_stops_no_bake():
+    """A record someone else's script damaged (wrong types) names no folder; the other materials
+    bake and Delete Unused lists as before."""
+    from ndfbake import bake, lobe_folders
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory)
+        other = bpy.data.materials.new("Other")
+        other["ndfbake_bake"] = '{"version": 1, "folder": null, "images": null, "targets": []}'
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        h.expect(result.folder == "//Bumpy.ndfbake", result.folder)
+        h.expect(lobe_folders.unused_folders() == [], "unused: %s" % lobe_folders.unused_folders())
 
 
 def test_folders_other_blend_files_use_are_kept():
@@ -269,12 +287,15 @@ def test_undo_after_a_save_finds_the_files():
 
 
 def test_delete_unused_folders_deletes_only_what_this_file_does_not_use():
-    from ndfbake import bake
+    from ndfbake import bake, lobe_folders
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
         bpy.ops.wm.save_mainfile()
         bake.bake_material(material, bake.BakeSettings(max_lobes=1))  # Bumpy~2; Bumpy.ndfbake was saved
+        # Not saved yet: the .blend on disk still uses Bumpy.ndfbake, so it is not offered.
+        offered = [os.path.basename(f) for f in lobe_folders.unused_folders()]
+        h.expect(offered == [], "offered before the save: %s" % offered)
         bpy.ops.wm.save_mainfile()
         h.close_file()
         h.expect(os.path.isdir(os.path.join(directory, "Bumpy.ndfbake")), "a folder a save used went at close")
@@ -298,6 +319,7 @@ if __name__ == "__main__":
            test_box_projection_leaves_filtering_to_the_renderer,
            test_undo_after_rebake_and_revert_finds_the_files,
            test_save_as_elsewhere_keeps_the_textures,
+           test_a_damaged_record_on_another_material_stops_no_bake,
            test_folders_other_blend_files_use_are_kept,
            test_undo_after_a_save_finds_the_files,
            test_delete_unused_folders_deletes_only_what_this_file_does_not_use])
