@@ -283,8 +283,8 @@ std::vector<BenchRow> run_benchmark_into(const BenchSettings& settings, const st
                     for (int level : settings.levels) {
                         if (level >= pyramid->level_count()) continue;
                         const auto all = reference_texels(map, level, brdf, directions.front(), 0);
-                        heatmaps.push_back({out_dir + "/heatmap_" + job.method + "_level" + std::to_string(level) + ".png",
-                                            pyramid->size(level),
+                        const std::string name = "heatmap_" + job.method + "_level" + std::to_string(level) + ".png";
+                        heatmaps.push_back({out_dir + "/" + name, pyramid->size(level),
                                             texel_errors(*pyramid, level, brdf, directions.front(), all)});
                     }
                 }

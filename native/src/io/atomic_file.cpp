@@ -70,7 +70,8 @@ void write_file_atomic(const std::string& final_path,
         remove_temp();
         // Writers' libraries name the file they were given: the user asked for final_path.
         std::string message = e.what();
-        for (size_t at = message.find(temp_path); at != std::string::npos; at = message.find(temp_path, at))
+        for (size_t at = message.find(temp_path); at != std::string::npos;
+             at = message.find(temp_path, at + final_path.size()))
             message.replace(at, temp_path.size(), final_path);
         throw Error(e.status(), message);
     } catch (...) {
