@@ -76,8 +76,8 @@ std::vector<std::vector<float>> color_textures(const LobePyramid& pyramid, const
     std::vector<VmfLobe> lobes(static_cast<size_t>(slots));
     for (int y = 0; y < size.height; ++y)
         for (int x = 0; x < size.width; ++x) {
-            gather_footprint(pyramid.source, level, x, y, pyramid.wrap, samples);
-            gather_footprint(rgb, level, x, y, pyramid.wrap, colors);
+            gather_footprint(pyramid.source, level, x, y, pyramid.settings.wrap, samples);
+            gather_footprint(rgb, level, x, y, pyramid.settings.wrap, colors);
             pyramid.texel(level, x, y, lobes);
             vmf_responsibilities(samples, lobes, z);
             for (int j = 0; j < slots; ++j) {
@@ -154,7 +154,7 @@ void write_atlas(const LobePyramid& pyramid, const DecodeResult& decoded, const 
     }
     std::vector<float> atlas(size_t(layout.width) * size_t(layout.height) * 4, 0.0f);
     for (int level = 0; level < pyramid.level_count(); ++level)
-        place_atlas_level(layout, level, lobe_texture(pyramid, level, lobe).data(), pyramid.wrap, atlas);
+        place_atlas_level(layout, level, lobe_texture(pyramid, level, lobe).data(), pyramid.settings.wrap, atlas);
     std::vector<ExrAttribute> attributes = file_attributes(pyramid, decoded, settings, write, -1, lobe, -1.0f,
                                                            "mip atlas of a vmf lobe slot: R = alpha, GBA = alpha * r");
     attributes.push_back({"ndfbake:atlas_levels", places});

@@ -49,7 +49,7 @@ LevelStats measure_level(const LobePyramid& pyramid, int level, const BaseBrdf& 
     for (int64_t i = 0; i < measured; ++i) {
         const int64_t t = measured == texels ? i : (i * texels) / measured + (texels / measured) / 2;
         const int x = int(t % stats.size.width), y = int(t / stats.size.width);
-        texel_reference_samples(pyramid.source, pyramid.wrap, level, x, y, sample_cap, samples);
+        texel_reference_samples(pyramid.source, pyramid.settings.wrap, level, x, y, sample_cap, samples);
         const TexelErrorMeter meter(samples, brdf, directions);
         fit_errors.push_back(meter.error(pyramid.texel_lobes(level, x, y)));
         const VmfLobe single = single_vmf_lobe(samples), toksvig = toksvig_lobe(samples);
@@ -58,7 +58,7 @@ LevelStats measure_level(const LobePyramid& pyramid, int level, const BaseBrdf& 
         naive_errors.push_back(meter.error(std::span(&naive, 1)));
         toksvig_errors.push_back(meter.error(std::span(&toksvig, 1)));
         if (measure_alignment && level > 0) {
-            gather_footprint(pyramid.source, level, x, y, pyramid.wrap, all_samples);
+            gather_footprint(pyramid.source, level, x, y, pyramid.settings.wrap, all_samples);
             children.clear();
             const LevelSize finer = pyramid.size(level - 1);
             for (int cy = 2 * y; cy < std::min(2 * y + 2, finer.height); ++cy)

@@ -152,7 +152,7 @@ void align_lobe_slots(LobePyramid& pyramid, const PyramidSettings& settings, con
                         if (!left.empty()) sum += left[s].alpha * left[s].mu;
                         pull[i] = settings.alignment_strength * sum;
                     }
-                    gather_footprint(pyramid.source, l, x, y, pyramid.wrap, samples);
+                    gather_footprint(pyramid.source, l, x, y, pyramid.settings.wrap, samples);
                     std::vector<VmfLobe> polished = lobes;
                     fit_vmf_mixture(samples, polished, polish, pull);
                     // A pull that empties a lobe would change the budget's choice: keep the fit.

@@ -72,7 +72,6 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
     LobePyramid pyramid;
     pyramid.source = map;
     pyramid.settings = settings;
-    pyramid.wrap = settings.wrap;
     pyramid.slots = std::clamp(settings.fit.max_lobes, 1, kMaxLobes);
     const int slots = pyramid.slots;
     const int levels = pyramid_level_count(map.width, map.height, settings);

@@ -68,9 +68,8 @@ struct LobeLevel {
 class LobePyramid {
 public:
     NormalMap source;
-    PyramidSettings settings;  // what it was fitted with: its files and report say so
-    WrapMode wrap = WrapMode::wrap;
-    int slots = 0;
+    PyramidSettings settings;  // what it was fitted with (wrap mode included): its files and report say so
+    int slots = 0;             // lobe slots per texel: settings.fit.max_lobes clamped to 1..kMaxLobes
     std::vector<LobeLevel> levels;
 
     int level_count() const { return int(levels.size()); }
