@@ -294,6 +294,15 @@ fs::path make_staging_dir(const fs::path& out_dir)
     return staging;
 }
 
+// The per-lobe colour needs a colour image of the normal map's size (the two arguments disagree).
+void require_color_size(const std::string& color_path, int width, int height, int map_width, int map_height)
+{
+    if (width != map_width || height != map_height)
+        throw Error(Status::invalid_argument, "colour image '" + color_path + "' is " + std::to_string(width) + "x" +
+                                                  std::to_string(height) + ", the normal map is " +
+                                                  std::to_string(map_width) + "x" + std::to_string(map_height));
+}
+
 }  // namespace
 
 std::vector<float> lobe_texture(const LobePyramid& pyramid, int level, int slot)
@@ -328,15 +337,6 @@ std::string color_file_name(int level, int lobe)
     char buffer[48];
     std::snprintf(buffer, sizeof buffer, "level%02d_color%d.exr", level, lobe);
     return buffer;
-}
-
-// The per-lobe colour needs a colour image of the normal map's size (the two arguments disagree).
-void require_color_size(const std::string& color_path, int width, int height, int map_width, int map_height)
-{
-    if (width != map_width || height != map_height)
-        throw Error(Status::invalid_argument, "colour image '" + color_path + "' is " + std::to_string(width) + "x" +
-                                                  std::to_string(height) + ", the normal map is " +
-                                                  std::to_string(map_width) + "x" + std::to_string(map_height));
 }
 
 BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& decoded, const std::string& out_dir,
