@@ -603,7 +603,8 @@ TEST_F(HostileInputs, AReadOnlyOutputFolderIsAnIoErrorAndNothingIsWritten)
                 ::prctl(PR_CAPBSET_DROP, CAP_DAC_READ_SEARCH, 0, 0, 0) == 0 &&
                 ::prctl(PR_CAPBSET_DROP, CAP_FOWNER, 0, 0, 0) == 0)
                 return nullptr;
-            if (::setgid(65534) != 0 || ::setuid(65534) != 0) return "drop CAP_DAC_OVERRIDE or become user nobody";
+            if (::setgid(testing_support::kNobodyGid) != 0 || ::setuid(testing_support::kNobodyUid) != 0)
+                return "drop CAP_DAC_OVERRIDE or become user nobody";
             return nullptr;
         },
         input, locked + "/out");

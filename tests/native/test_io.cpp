@@ -827,8 +827,7 @@ class UnprivilegedScope {
 public:
     UnprivilegedScope() : dropped_(::geteuid() == 0)
     {
-        constexpr uid_t kNobody = 65534;
-        if (dropped_ && (::setegid(kNobody) != 0 || ::seteuid(kNobody) != 0))
+        if (dropped_ && (::setegid(testing_support::kNobodyGid) != 0 || ::seteuid(testing_support::kNobodyUid) != 0))
             throw std::runtime_error("cannot take nobody's effective ids");
     }
     ~UnprivilegedScope()

@@ -16,6 +16,11 @@
 
 namespace ndfbake::testing_support {
 
+// Debian's user and group nobody: the ids a test running as root takes where permission bits must
+// bind (root ignores them).
+inline constexpr uid_t kNobodyUid = 65534;
+inline constexpr gid_t kNobodyGid = 65534;
+
 class TempDirTest : public ::testing::Test {
 protected:
     void SetUp() override
