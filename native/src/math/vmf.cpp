@@ -22,10 +22,27 @@ double mean_resultant_length(double kappa)
     return 1.0 / std::tanh(kappa) - 1.0 / kappa;
 }
 
+namespace {
+
+// The resultant length past which Banerjee's κ exceeds kKappaMax, by Newton's method on
+// R(3 − R²) − κ(1 − R²) = 0 (increasing on (0, 1)), plus a margin far above rounding: from there
+// on kappa_from_resultant returns the cap without its division. Every fine normal asks (level 1
+// holds each as a lobe).
+constexpr double saturated_resultant()
+{
+    double r = 1.0 - 1.0 / double(kKappaMax);
+    for (int i = 0; i < 20; ++i)
+        r -= (r * (3.0 - r * r) - double(kKappaMax) * (1.0 - r * r)) / (3.0 - 3.0 * r * r + 2.0 * double(kKappaMax) * r);
+    return r + 1e-12;
+}
+constexpr double kSaturatedResultant = saturated_resultant();
+
+}  // namespace
+
 float kappa_from_resultant(double r)
 {
     if (!(r > 0.0)) return kKappaMin;  // also catches NaN
-    if (r >= 1.0) return kKappaMax;
+    if (r >= kSaturatedResultant) return kKappaMax;
     const double kappa = r * (3.0 - r * r) / (1.0 - r * r);
     return float(std::clamp(kappa, double(kKappaMin), double(kKappaMax)));
 }
