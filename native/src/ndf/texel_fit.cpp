@@ -104,8 +104,19 @@ std::vector<VmfLobe> farthest_point_seeds(std::span<const VmfLobe> candidates,
                                           std::span<const WeightedNormal> samples, int count)
 {
     std::vector<VmfLobe> seeds;
+    seeds.reserve(size_t(std::clamp(count, 1, kMaxLobes)));
+    // Each candidate's and sample's distance to its nearest seed, updated as seeds are added (a
+    // texel's seeding visits them once per seed, not once per seed pair). The samples' are kept
+    // only once the candidates run out.
+    thread_local std::vector<float> candidate_distance, sample_distance;
+    candidate_distance.assign(candidates.size(), std::numeric_limits<float>::infinity());
+    sample_distance.clear();
     auto add_seed = [&](const Vec3& mu, float kappa) {
         seeds.push_back({0.0f, mu, std::clamp(kappa, kKappaMin, kMaxSeedKappa)});
+        for (size_t c = 0; c < candidates.size(); ++c)
+            candidate_distance[c] = std::min(candidate_distance[c], 1.0f - dot(candidates[c].mu, mu));
+        for (size_t i = 0; i < sample_distance.size(); ++i)
+            sample_distance[i] = std::min(sample_distance[i], 1.0f - dot(samples[i].n, mu));
     };
 
     const VmfLobe* heaviest = nullptr;
@@ -116,23 +127,24 @@ std::vector<VmfLobe> farthest_point_seeds(std::span<const VmfLobe> candidates,
     else return seeds;
 
     while (int(seeds.size()) < count) {
-        const VmfLobe* best = nullptr;
+        size_t best = candidates.size();
         float best_distance = kDistinctSeedDistance;
-        for (const VmfLobe& c : candidates) {
-            if (!(c.alpha > 0.0f)) continue;
-            const float d = nearest_seed_distance(c.mu, seeds);
-            if (d > best_distance) { best_distance = d; best = &c; }
+        for (size_t c = 0; c < candidates.size(); ++c) {
+            if (!(candidates[c].alpha > 0.0f)) continue;
+            if (candidate_distance[c] > best_distance) { best_distance = candidate_distance[c]; best = c; }
         }
-        if (best) { add_seed(best->mu, best->kappa); continue; }
+        if (best < candidates.size()) { add_seed(candidates[best].mu, candidates[best].kappa); continue; }
 
-        const WeightedNormal* far_sample = nullptr;
-        best_distance = kDistinctSeedDistance;
-        for (const WeightedNormal& s : samples) {
-            const float d = nearest_seed_distance(s.n, seeds);
-            if (d > best_distance) { best_distance = d; far_sample = &s; }
+        if (sample_distance.empty()) {
+            sample_distance.resize(samples.size());
+            for (size_t i = 0; i < samples.size(); ++i) sample_distance[i] = nearest_seed_distance(samples[i].n, seeds);
         }
-        if (!far_sample) break;
-        add_seed(normalize_or(far_sample->n, {0, 0, 1}), seeds.front().kappa);
+        size_t far_sample = samples.size();
+        best_distance = kDistinctSeedDistance;
+        for (size_t i = 0; i < samples.size(); ++i)
+            if (sample_distance[i] > best_distance) { best_distance = sample_distance[i]; far_sample = i; }
+        if (far_sample == samples.size()) break;
+        add_seed(normalize_or(samples[far_sample].n, {0, 0, 1}), seeds.front().kappa);
     }
     for (VmfLobe& seed : seeds) seed.alpha = 1.0f / float(seeds.size());
     return seeds;
