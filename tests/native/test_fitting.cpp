@@ -9,6 +9,7 @@
 #include "bake/level_stats.h"
 #include "math/sphere.h"
 #include "ndf/moments.h"
+#include "ndf/spherical_kmeans.h"
 #include "ndf/texel_fit.h"
 #include "pyramid/lobe_pyramid.h"
 #include "synth/patterns.h"
@@ -120,6 +121,61 @@ TEST(SphericalEm, DeadLobesArePrunedNotLeftAsNaN)
     for (const VmfLobe& l : fit.lobes) total += l.alpha;
     EXPECT_NEAR(total, 1.0f, 1e-5f);
     expect_valid_lobes(fit.lobes);
+}
+
+// Two clusters far apart: k-means must find each cluster's own vMF (its mean resultant), which
+// EM reaches as well, since responsibilities across the gap are ~0.
+TEST(SphericalKmeans, SeparatedClustersGiveEachClustersOwnLobeAsEmDoes)
+{
+    std::mt19937 rng(11);
+    const Vec3 a = normalize_or({0.6f, 0.0f, 0.8f}, {}), b = normalize_or({-0.5f, 0.3f, 0.8f}, {});
+    std::vector<Vec3> normals;
+    for (int i = 0; i < 48; ++i) normals.push_back(sample_vmf(rng, a, 400.0f));
+    for (int i = 0; i < 16; ++i) normals.push_back(sample_vmf(rng, b, 900.0f));
+    const auto samples = unit_samples(normals);
+    std::vector<VmfLobe> kmeans = farthest_point_seeds({}, samples, 2), em = kmeans;
+    const int steps = spherical_kmeans(samples, kmeans, 10);
+    EXPECT_LT(steps, 10);  // stops once the assignment is stable
+    fit_vmf_mixture(samples, em, {200, 1e-12});
+    if (kmeans[0].alpha < kmeans[1].alpha) std::swap(kmeans[0], kmeans[1]);
+    if (em[0].alpha < em[1].alpha) std::swap(em[0], em[1]);
+    const std::span<const WeightedNormal> first(samples.data(), 48), second(samples.data() + 48, 16);
+    const VmfLobe truth[2] = {single_vmf_lobe(first), single_vmf_lobe(second)};
+    EXPECT_FLOAT_EQ(kmeans[0].alpha, 0.75f);
+    for (int j = 0; j < 2; ++j) {
+        EXPECT_GT(dot(kmeans[j].mu, truth[j].mu), 1.0f - 1e-6f) << j;
+        EXPECT_NEAR(kmeans[j].kappa / truth[j].kappa, 1.0f, 1e-3f) << j;
+        EXPECT_NEAR(kmeans[j].alpha, em[j].alpha, 1e-3f) << j;
+        EXPECT_GT(dot(kmeans[j].mu, em[j].mu), std::cos(0.1f * 3.14159f / 180.0f)) << j;
+        EXPECT_NEAR(kmeans[j].kappa / em[j].kappa, 1.0f, 0.02f) << j;
+    }
+}
+
+TEST(SphericalKmeans, LimitsAntipodalEmptyAndOneSample)
+{
+    // Antipodal normals split into two saturated lobes; a third seed that no sample joins gets α = 0.
+    const auto antipodal = unit_samples({{0, 0, 1}, {0, 0, -1}, {0, 0, 1}});
+    std::vector<VmfLobe> lobes = {{1.0f / 3, {0, 0, 1}, 10.0f}, {1.0f / 3, {0, 0, -1}, 10.0f}, {1.0f / 3, {1, 0, 0}, 10.0f}};
+    spherical_kmeans(antipodal, lobes, 5);
+    EXPECT_NEAR(lobes[0].alpha, 2.0f / 3, 1e-6f);
+    EXPECT_NEAR(lobes[1].alpha, 1.0f / 3, 1e-6f);
+    EXPECT_EQ(lobes[2].alpha, 0.0f);
+    EXPECT_EQ(lobes[0].kappa, kKappaMax);
+    EXPECT_EQ(lobes[1].kappa, kKappaMax);
+    expect_valid_lobes(lobes);
+    // Normals that cancel inside one lobe: R = 0 gives κ = kKappaMin and keeps the old direction.
+    const auto cancelling = unit_samples({{1, 0, 0.001f}, {-1, 0, 0.001f}});
+    std::vector<VmfLobe> one = {{1.0f, {0, 0, 1}, 100.0f}};
+    spherical_kmeans(cancelling, one, 3);
+    EXPECT_EQ(one[0].alpha, 1.0f);
+    EXPECT_LT(one[0].kappa, 0.01f);
+    expect_valid_lobes(one);
+    // One sample, one lobe: the sample itself.
+    const auto single = unit_samples({{0.3f, 0.4f, 0.866f}});
+    std::vector<VmfLobe> seed = {{1.0f, {0, 0, 1}, 1.0f}};
+    EXPECT_EQ(spherical_kmeans(single, seed, 3), 2);  // moves once, then stays
+    EXPECT_GT(dot(seed[0].mu, single[0].n), 1.0f - 1e-6f);
+    EXPECT_EQ(seed[0].kappa, kKappaMax);
 }
 
 TEST(LobeBudget, AddsLobesOnlyWhileTheErrorIsAboveTolerance)

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <limits>
 
+#include "ndf/spherical_kmeans.h"
+
 namespace ndfbake {
 
 namespace {
@@ -26,10 +28,13 @@ std::vector<VmfLobe> fit_from_seeds(std::span<const WeightedNormal> samples, std
                                     int count, const TexelFitSettings& settings)
 {
     const bool few_samples = samples.size() <= size_t(kSecondStartMinSamples);
-    EmSettings em = settings.em;
-    if (few_samples && settings.few_sample_shortcut)
-        em.max_iterations = std::min(em.max_iterations, kFewSampleIterations);
+    const EmSettings& em = settings.em;
     std::vector<VmfLobe> from_children = farthest_point_seeds(child_lobes, samples, count);
+    if (settings.solver == TexelSolver::spherical_kmeans) {
+        spherical_kmeans(samples, from_children, em.max_iterations);
+        drop_light_lobes(from_children, 0.0f);
+        return from_children;
+    }
     const double children_fit = fit_vmf_mixture(samples, from_children, em).mean_log_likelihood;
     if (!settings.two_starts || few_samples) {
         drop_light_lobes(from_children, 0.0f);

@@ -14,15 +14,16 @@ namespace ndfbake {
 // lobes only: measured on the synthetic patterns, the second start changes nothing there (few
 // samples have few local optima) and costs a third of the fit.
 inline constexpr int kSecondStartMinSamples = 64;
-// ... and, in the hierarchical fit, runs at most this many EM iterations: its seeds, the finer
-// level's lobes, already sit on its few samples (at level 2 they are the fine normals). Measured
-// on the synthetic patterns at 1024²: the same error as 10 iterations (±1%), a tenth less fitting
-// time. The per-level reference runs EmSettings::max_iterations everywhere, as §7.1 does.
-inline constexpr int kFewSampleIterations = 3;
 
 // EM's starting κ is capped: seeds taken from finer levels can be near kKappaMax, and a start
 // that sharp makes the first E-step a hard assignment that EM cannot recover from.
 inline constexpr float kMaxSeedKappa = 1e3f;
+
+// How a texel's lobes are fitted to its samples once seeded.
+enum class TexelSolver {
+    em,                // spherical EM (ndf/spherical_em.h), as §7.1
+    spherical_kmeans,  // its hard-assignment limit (ndf/spherical_kmeans.h), from the finer level's lobes only
+};
 
 struct TexelFitSettings {
     int max_lobes = 4;        // 1..kMaxLobes
@@ -37,9 +38,8 @@ struct TexelFitSettings {
     // the texel has more than kSecondStartMinSamples samples; off, only the finer level's lobes
     // seed EM, as in §7.1.
     bool two_starts = true;
-    // At most kFewSampleIterations EM iterations on texels of at most kSecondStartMinSamples
-    // samples; off, every texel runs em.max_iterations.
-    bool few_sample_shortcut = true;
+    // spherical_kmeans runs at most em.max_iterations steps, one start (two_starts is EM's).
+    TexelSolver solver = TexelSolver::em;
 };
 
 struct TexelFit {

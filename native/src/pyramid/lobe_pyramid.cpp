@@ -107,7 +107,12 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
         bins = binned ? BinnedLevel(level.size) : BinnedLevel();
         TexelFitSettings fit_settings = settings.fit;
         if (binned) fit_settings.em.max_iterations = std::min(fit_settings.em.max_iterations, kBinnedIterations);
-        if (!hierarchical) fit_settings.few_sample_shortcut = false;  // the reference: §7.1 as written
+        const uint64_t footprint = largest_footprint(map.width, map.height, l);
+        if (hierarchical && !settings.refine && footprint <= kOneStartFootprint) {
+            fit_settings.two_starts = false;
+            fit_settings.em.max_iterations = std::min(fit_settings.em.max_iterations, kFewNormalsIterations);
+            if (footprint <= kKmeansFootprint) fit_settings.solver = TexelSolver::spherical_kmeans;
+        }
         // EM seeds from the children's lobes only where a texel has more samples than lobes.
         const bool seeded = largest_footprint(map.width, map.height, l) > uint64_t(slots);
         parallel_rows(level.size.height, settings.threads, [&](int y) {
