@@ -110,8 +110,10 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
         const uint64_t footprint = largest_footprint(map.width, map.height, l);
         if (hierarchical && !settings.refine && footprint <= kOneStartFootprint) {
             fit_settings.two_starts = false;
-            fit_settings.em.max_iterations = std::min(fit_settings.em.max_iterations, kFewNormalsIterations);
-            if (footprint <= kKmeansFootprint) fit_settings.solver = TexelSolver::spherical_kmeans;
+            const bool kmeans = footprint <= kKmeansFootprint;
+            if (kmeans) fit_settings.solver = TexelSolver::spherical_kmeans;
+            fit_settings.em.max_iterations =
+                std::min(fit_settings.em.max_iterations, kmeans ? kKmeansSteps : kOneStartIterations);
         }
         // EM seeds from the children's lobes only where a texel has more samples than lobes.
         const bool seeded = largest_footprint(map.width, map.height, l) > uint64_t(slots);

@@ -25,25 +25,28 @@ enum class FitMethod {
 };
 
 // How the hierarchical fit fits a texel, by how many fine normals its footprint holds. Up to
-// kKmeansFootprint (levels 2–3: 330,000 of a 2048² map's 1.4 million fitted texels): spherical
-// k-means from the children's lobes; there the children's lobes sit on the texel's few normals
-// (at level 2 they are the fine normals) and EM's responsibilities would be nearly 0 or 1. Up to
-// kOneStartFootprint (level 4, the first level fitted to bins): EM from the children's lobes
-// alone. Both run at most kFewNormalsIterations steps. Above: EM from the children's lobes and
-// from the farthest samples, the likelier kept (TexelFitSettings::two_starts), at most
-// kBinnedIterations iterations. Measured at 2048², one thread, against three EM iterations at
-// levels 2–3 and two starts of five at level 4: fbm fits in 1.13 s instead of 1.62 s at a mean
-// error over levels 1+ (GGX 0.5) of 0.0839 instead of 0.0836 (per-level EM: 0.103); bumps 0.0565 /
-// 0.0556, brushed 0.0369 / 0.0363, weave 0.1316 / 0.1294. Over FitAccuracy's 36 cases (Blinn-Phong
-// 32 and 128, where the lobes' shapes matter more) 0.1969 of Toksvig's error instead of 0.1963:
-// k-means' level 2 is worse (0.153 / 0.143), the levels seeded from it better. EM at level 2–3
-// with one iteration instead was 0.2096 (and k-means at level 4 0.2304). A refined fit
-// (PyramidSettings::refine) fits these texels as the levels above: it spends 60× the time on
-// lobes for one BRDF, and its Levenberg-Marquardt steps end nearer the optimum from EM's full fit
-// (there, level 4 at Blinn-Phong 128: 0.218 of Toksvig's error from these fits, 0.195 from EM's).
+// kKmeansFootprint (levels 2–3: 330,000 of a 2048² map's 1.4 million fitted texels): one step of
+// spherical k-means from the children's lobes (each normal joins the nearest seed, each lobe is
+// its normals' vMF); there the seeds sit on the texel's few normals (at level 2 they are the fine
+// normals) and EM's responsibilities would be nearly 0 or 1. Up to kOneStartFootprint (levels
+// 4–5): EM from the children's lobes alone, at most kOneStartIterations iterations. Above: EM
+// from the children's lobes and from the farthest samples, the likelier kept
+// (TexelFitSettings::two_starts), at most kBinnedIterations iterations. Measured at 2048², one
+// thread, against three EM iterations at levels 2–3 and two starts of five above: fbm fits in
+// 0.91 s instead of 1.62 s (per-level EM: 4.71 s) at a mean error over levels 1+ (GGX 0.5) of
+// 0.0872 instead of 0.0836 (per-level EM: 0.1029); bumps 0.0566 / 0.0556 (0.0537), brushed
+// 0.0365 / 0.0363 (0.0369), weave 0.1323 / 0.1294 (0.1320). Over FitAccuracy's 36 cases
+// (Blinn-Phong 32 and 128, where the lobes' shapes matter more) 0.1982 of Toksvig's error instead
+// of 0.1963. More k-means steps buy little: two give fbm 0.0864 and 0.1973 there, in 0.07 s more;
+// one EM start above level 5 costs brushed a fifth (0.0434), and k-means at level 4 FitAccuracy
+// a sixth (0.2304). A refined fit (PyramidSettings::refine) fits every texel as the levels above
+// 5: it spends 60× the time on lobes for one BRDF, and its Levenberg-Marquardt steps end nearer
+// the optimum from EM's full fit (level 4 at Blinn-Phong 128: 0.218 of Toksvig's error from the
+// shortcuts, 0.195 from EM's).
 inline constexpr uint64_t kKmeansFootprint = 64;
-inline constexpr uint64_t kOneStartFootprint = 256;
-inline constexpr int kFewNormalsIterations = 3;
+inline constexpr int kKmeansSteps = 1;
+inline constexpr uint64_t kOneStartFootprint = 1024;
+inline constexpr int kOneStartIterations = 3;
 
 struct PyramidSettings {
     FitMethod method = FitMethod::hierarchical;
