@@ -49,10 +49,9 @@ std::vector<VmfLobe> fit_from_seeds(std::span<const WeightedNormal> samples, std
 
 // No more samples than lobes: each distinct sample is a lobe, the maximum-likelihood fit that EM
 // would converge to, without running it.
-std::vector<VmfLobe> lobes_of_samples(std::span<const WeightedNormal> samples)
+void lobes_of_samples(std::span<const WeightedNormal> samples, std::vector<VmfLobe>& lobes)
 {
-    std::vector<VmfLobe> lobes;
-    lobes.reserve(samples.size());
+    lobes.clear();
     double total = 0.0;
     for (const WeightedNormal& s : samples) total += s.weight;
     for (const WeightedNormal& s : samples) {
@@ -65,7 +64,6 @@ std::vector<VmfLobe> lobes_of_samples(std::span<const WeightedNormal> samples)
         if (same != lobes.end()) same->alpha += alpha;
         else lobes.push_back({alpha, mu, kappa});
     }
-    return lobes;
 }
 
 // Two lobes as one: weights add, and so do their α-weighted mean resultant vectors (the merged
@@ -155,6 +153,12 @@ std::vector<VmfLobe> farthest_point_seeds(std::span<const VmfLobe> candidates,
     return seeds;
 }
 
+void exact_texel_lobes(std::span<const WeightedNormal> samples, std::vector<VmfLobe>& lobes)
+{
+    lobes_of_samples(samples, lobes);
+    if (lobes.size() <= 1) lobes.assign(1, single_vmf_lobe(samples));
+}
+
 TexelFit fit_texel(std::span<const WeightedNormal> samples, std::span<const VmfLobe> child_lobes,
                    const TexelFitSettings& settings, const TexelErrorMeter* meter)
 {
@@ -170,10 +174,15 @@ TexelFit fit_texel(std::span<const WeightedNormal> samples, std::span<const VmfL
         if (max_lobes == 1 || (budgeted && best.error <= settings.tolerance)) return best;
     }
 
+    if (!budgeted && max_lobes > 1 && int(samples.size()) <= max_lobes) {
+        exact_texel_lobes(samples, best.lobes);
+        if (meter) best.error = meter->error(best.lobes);
+        return best;
+    }
     // The most lobes the samples support: each distinct sample when there are few, else EM.
-    std::vector<VmfLobe> full = int(samples.size()) <= max_lobes
-                                    ? lobes_of_samples(samples)
-                                    : fit_from_seeds(samples, child_lobes, max_lobes, settings);
+    std::vector<VmfLobe> full;
+    if (int(samples.size()) <= max_lobes) lobes_of_samples(samples, full);
+    else full = fit_from_seeds(samples, child_lobes, max_lobes, settings);
     if (full.size() > 1) {
         const float error = meter ? meter->error(full) : -1.0f;
         if (!budgeted || error < best.error) {

@@ -55,6 +55,12 @@ struct TexelFit {
 std::vector<VmfLobe> farthest_point_seeds(std::span<const VmfLobe> candidates,
                                           std::span<const WeightedNormal> samples, int count);
 
+// A texel of no more samples than lobes, without a lobe budget: each distinct sample is a lobe
+// (the maximum-likelihood fit that EM would converge to, without running it), or the samples'
+// single lobe where they hold one direction; what fit_texel returns there. Into `lobes`, whose
+// storage is reused: level 1 of a 2048² map has a million such texels.
+void exact_texel_lobes(std::span<const WeightedNormal> samples, std::vector<VmfLobe>& lobes);
+
 // The lobe budget: one lobe when it meets the tolerance; otherwise the max_lobes fit, merged down
 // for as long as the error stays within the tolerance. With tolerance ≤ 0, always the max_lobes
 // fit. `meter` scores candidates (and fills TexelFit::error); it may be nullptr without a budget.

@@ -16,7 +16,7 @@ namespace {
 
 VmfLobe level0_lobe(const Vec3& n) { return {1.0f, n, kKappaMax}; }
 
-void store_texel(LobeLevel& level, int slots, int x, int y, std::vector<VmfLobe> lobes, float error)
+void store_texel(LobeLevel& level, int slots, int x, int y, std::span<VmfLobe> lobes, float error)
 {
     std::sort(lobes.begin(), lobes.end(), [](const VmfLobe& a, const VmfLobe& b) { return a.alpha > b.alpha; });
     const size_t texel = size_t(y) * size_t(level.size.width) + size_t(x);
@@ -117,12 +117,21 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
         }
         // EM seeds from the children's lobes only where a texel has more samples than lobes.
         const bool seeded = largest_footprint(map.width, map.height, l) > uint64_t(slots);
+        // Texels of no more fine normals than slots (level 1 at 4 lobes) hold them exactly: no
+        // seeds, no EM, no refinement; without a budget nothing is scored either.
+        const bool exact = !seeded && !budgeted;
         parallel_rows(level.size.height, settings.threads, [&](int y) {
             std::vector<WeightedNormal> samples, scored, refined_normals;
-            std::vector<VmfLobe> children, child(static_cast<size_t>(slots));
+            std::vector<VmfLobe> children, child(static_cast<size_t>(slots)), lobes;
             std::optional<BinAccumulator> binner;
             if (binned) binner.emplace();
             for (int x = 0; x < level.size.width; ++x) {
+                if (exact) {
+                    gather_footprint(map, l, x, y, settings.wrap, samples);
+                    exact_texel_lobes(samples, lobes);
+                    store_texel(level, slots, x, y, lobes, -1.0f);
+                    continue;
+                }
                 children.clear();
                 for (int cy = 2 * y; seeded && cy < std::min(2 * y + 2, finer.size.height); ++cy)
                     for (int cx = 2 * x; cx < std::min(2 * x + 2, finer.size.width); ++cx) {
@@ -157,7 +166,7 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
                     refiner->refine(refined_normals, fit.lobes);
                     if (meter) fit.error = meter->error(fit.lobes);
                 }
-                store_texel(level, slots, x, y, std::move(fit.lobes), fit.error);
+                store_texel(level, slots, x, y, fit.lobes, fit.error);
             }
         }, stage_tick);
         finer_bins = std::move(bins);
