@@ -82,7 +82,7 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
         const size_t texels = size_t(level.size.width) * size_t(level.size.height);
         level.budget_error.assign(texels, -1.0f);
         if (l == 0) level.level0_slot.assign(texels, 0);
-        else level.lobes.assign(texels * size_t(slots), VmfLobe{});
+        else level.lobes.resize(texels * size_t(slots));
     }
 
     const bool budgeted = settings.fit.tolerance > 0.0f && slots > 1;
