@@ -111,7 +111,7 @@ TEST(NormalBins, SamplesAreMeanResultantsWeightedByCount)
     const std::vector<WeightedNormal> normals{{a, 1.0f}, {b, 3.0f}};
     bins.add(normals);
     std::vector<WeightedNormal> samples;
-    bin_samples(bins.finish(), samples);
+    bin_samples(bins.finish(), kMaxBinSamples, samples);
     ASSERT_EQ(samples.size(), 1u);
     EXPECT_EQ(samples[0].weight, 4.0f);
     const Vec3 mean = (a + 3.0f * b) / 4.0f;

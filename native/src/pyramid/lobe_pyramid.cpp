@@ -146,7 +146,7 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
                     const bool summed = accumulate_texel_bins(map, finer_bins, l, x, y, settings.wrap, *binner, scored);
                     const std::span<const NormalBin> texel_bins = binner->finish();
                     bins.append_texel(y, texel_bins);
-                    bin_samples(texel_bins, samples);
+                    bin_samples(texel_bins, settings.refine ? kRefinedBinSamples : kMaxBinSamples, samples);
                     if (scoring && summed) gather_footprint(map, l, x, y, settings.wrap, scored);
                 } else {
                     gather_footprint(map, l, x, y, settings.wrap, samples);

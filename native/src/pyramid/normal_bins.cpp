@@ -90,10 +90,10 @@ bool accumulate_texel_bins(const NormalMap& map, const BinnedLevel& finer, int l
     return false;
 }
 
-void bin_samples(std::span<const NormalBin> bins, std::vector<WeightedNormal>& out)
+void bin_samples(std::span<const NormalBin> bins, int max_samples, std::vector<WeightedNormal>& out)
 {
     out.clear();
-    if (bins.size() <= size_t(kMaxBinSamples)) {
+    if (bins.size() <= size_t(max_samples)) {
         for (const NormalBin& bin : bins) out.push_back({bin.sum / bin.weight, bin.weight});
         return;
     }
@@ -114,7 +114,7 @@ void bin_samples(std::span<const NormalBin> bins, std::vector<WeightedNormal>& o
             weight[cell] += bin.weight;
             sum[cell] += bin.sum;
         }
-        if (occupied.size() <= size_t(kMaxBinSamples)) break;
+        if (occupied.size() <= size_t(max_samples)) break;
     }
     for (uint32_t cell : occupied) out.push_back({sum[cell] / weight[cell], weight[cell]});
 }
