@@ -274,6 +274,38 @@ INSTANTIATE_TEST_SUITE_P(Sizes, PyramidHardCases,
                          ::testing::Values(std::pair{1, 1}, std::pair{1, 9}, std::pair{3, 5}, std::pair{4097, 3},
                                            std::pair{64, 64}));
 
+// Level arrays are allocated unfilled (LobeLevel::lobes): the fit must write every slot of every
+// texel itself. Without alignment (which rewrites every slot) an empty slot must be exactly the
+// empty lobe, not whatever the allocation held (fresh pages are zero: μ = 0 would show it).
+TEST_P(PyramidHardCases, TheFitWritesEverySlotOfEveryTexel)
+{
+    const auto [w, h] = GetParam();
+    const NormalMap map = synthesize(Pattern::bumps, w, h);
+    for (FitMethod method : {FitMethod::hierarchical, FitMethod::per_level})
+        for (WrapMode wrap : {WrapMode::wrap, WrapMode::clamp}) {
+            PyramidSettings settings;
+            settings.method = method;
+            settings.wrap = wrap;
+            settings.align = false;
+            settings.fit.max_lobes = 6;  // more slots than many texels have distinct normals
+            const LobePyramid pyramid = build_lobe_pyramid(map, settings, {});
+            for (int level = 1; level < pyramid.level_count(); ++level) {
+                const LevelSize size = pyramid.size(level);
+                std::vector<VmfLobe> lobes(static_cast<size_t>(pyramid.slots));
+                for (int y = 0; y < size.height; ++y)
+                    for (int x = 0; x < size.width; ++x) {
+                        pyramid.texel(level, x, y, lobes);
+                        for (const VmfLobe& l : lobes) {
+                            if (l.alpha > 0.0f) continue;
+                            ASSERT_TRUE(l.alpha == 0.0f && l.mu.x == 0.0f && l.mu.y == 0.0f && l.mu.z == 1.0f &&
+                                        l.kappa == kKappaMin)
+                                << "level " << level << " texel " << x << "," << y;
+                        }
+                    }
+            }
+        }
+}
+
 // What EEVEE does with our level-0 lobe textures: box-average α and α·r per slot over a 2^L block.
 // The averaged lobes of each block, decoded as a shader would, are scored against the exact
 // effective BRDF of the block.
