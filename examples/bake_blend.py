@@ -72,7 +72,7 @@ def _arguments():
     parser.add_argument("--tolerance", type=_bounded(float, 0.0, 1.0), default=0.0,
                         help="relative error a texel may keep, 0..1: fewer lobes where it suffices (default 0)")
     parser.add_argument("--refine", action="store_true",
-                        help="refine the lobes for each material's roughness (lower error, about 60x the fit time)")
+                        help="refine the lobes for each material's roughness (lower error, 100-300x the fit time)")
     parser.add_argument("--level-of-detail", choices=("scene", "renderer"), default="scene",
                         help="scene (default): the node group picks a level per pixel from the scene camera and "
                              "only the levels the cameras reach are baked; renderer: level 0, filtered by the "

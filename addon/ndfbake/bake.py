@@ -54,7 +54,7 @@ _STAGES = (("decode", 0.02), ("fit", 0.60), ("measure", 0.30), ("write", 0.08))
 class BakeSettings:
     max_lobes: int = 4          # 1..8 lobes per texel
     tolerance: float = 0.0      # relative effective-BRDF error a texel may keep (0: max_lobes everywhere)
-    refine: bool = False        # refine the lobes for the material's roughness (about 60x the fit time)
+    refine: bool = False        # refine the lobes for the material's roughness (100-300x the fit time)
     threads: int = 0            # 0: every core
     pack: bool = False          # also pack the lobe textures into the .blend
     level_of_detail: str = "SCENE"  # "SCENE": atlases at a level from the camera; "RENDERER": level 0

@@ -14,7 +14,7 @@ class NDFBakeSettings(bpy.types.PropertyGroup):
                              "fewer lobes where it suffices (0: the maximum everywhere)",
                              default=0.0, min=0.0, max=1.0, precision=3, step=1)
     refine: BoolProperty(name="Refine for Roughness", description="Move the lobes to where they shade closest "
-                         "to the exact filtered look at the material's roughness: lower error, about 60x the "
+                         "to the exact filtered look at the material's roughness: lower error, 100-300x the "
                          "fitting time", default=False)
     pack: BoolProperty(name="Pack Textures", description="Also pack the lobe textures into the .blend",
                        default=False)

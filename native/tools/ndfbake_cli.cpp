@@ -44,13 +44,15 @@ bake options:
                        (for renderers without MIP levels; layout in report.json)
   --method M           hierarchical (default: every level from the binned normals of the level
                        below) or per-level (every level from all its fine normals: Han's
-                       reference, 2-3x slower)
+                       reference, 4-5x slower)
   --iterations N       EM iterations per texel at most (default 10; the hierarchical fit runs
-                       at most 5 on binned levels)
+                       one k-means step at levels 2-3, at most 3 iterations at levels 4-5 and
+                       5 above)
   --starts N           2 (default): EM from the finer level's lobes and from the farthest
-                       samples, keeping the likelier; 1: from the finer level's lobes (Han 7.1)
+                       samples, keeping the likelier (the hierarchical fit: above level 5);
+                       1: from the finer level's lobes (Han 7.1)
   --refine             after EM, refine every texel's lobes against the effective BRDF of
-                       --brdf (lower error for that BRDF; about 60x the fitting time)
+                       --brdf (lower error for that BRDF; 100-300x the fitting time)
   --no-align           fit texels independently (no lobe alignment across texels and levels)
   --threads N          worker threads (default: all cores)
   --max-memory SIZE    refuse a map whose bake would need more memory than SIZE bytes (K, M,

@@ -41,7 +41,7 @@ enum class FitMethod {
 // of 0.1963. More k-means steps buy little: two give fbm 0.0864 and 0.1973 there, in 0.07 s more;
 // one EM start above level 5 costs brushed a fifth (0.0434), and k-means at level 4 FitAccuracy
 // a sixth (0.2304). A refined fit (PyramidSettings::refine) fits every texel as the levels above
-// 5: it spends 60× the time on lobes for one BRDF, and its Levenberg-Marquardt steps end nearer
+// 5: it spends 100–300× the time on lobes for one BRDF, and its Levenberg-Marquardt steps end nearer
 // the optimum from EM's full fit (level 4 at Blinn-Phong 128: 0.218 of Toksvig's error from the
 // shortcuts, 0.195 from EM's).
 inline constexpr uint64_t kKmeansFootprint = 64;
@@ -68,9 +68,10 @@ struct PyramidSettings {
     // Refine every texel's lobes against the effective BRDF of `brdf` (ndf/brdf_refinement.h)
     // after EM. Measured: at Blinn-Phong 128 on the six synthetic patterns, 4 lobes' mean error at
     // levels 4 and 6 falls by a quarter (0.26 → 0.20 of Toksvig's); on a 1024² fBm map at GGX
-    // roughness 0.3, the mean over levels 1+ from 0.248 to 0.202, and the fit takes 60× as long
-    // (0.37 s → 21 s on 2 cores). The refinement sees the texel's fine normals, at most
-    // kRefineSampleCap of them.
+    // roughness 0.3, the mean over levels 1+ from 0.248 to 0.202 (the fit then 0.37 s → 21 s on
+    // 2 cores). `ndfbake bench` on 2026-11-26: 60–350× the default fit's time (which takes
+    // shortcuts a refined fit does not: kKmeansFootprint). The refinement sees the texel's fine
+    // normals, at most kRefineSampleCap of them.
     bool refine = false;
     // The most memory a fit or bake may use (bake/memory_budget.h); 0: physical memory.
     uint64_t max_memory_bytes = 0;

@@ -96,7 +96,7 @@ bool accumulate_texel_bins(const NormalMap& map, const BinnedLevel& finer, int l
 // 0.1323; FitAccuracy's 36 cases (Blinn-Phong 32 and 128) 0.1975 / 0.1982 of Toksvig's error.
 inline constexpr int kMaxBinSamples = 128;
 // ... and in a refined fit (PyramidSettings::refine), which starts its Levenberg-Marquardt steps
-// from EM's fit and spends 60× the time anyway: there 256 cells keep level 4 at Blinn-Phong 128
+// from EM's fit and spends 100–300× the time anyway: there 256 cells keep level 4 at Blinn-Phong 128
 // at 0.199 of Toksvig's error instead of 0.201.
 inline constexpr int kRefinedBinSamples = 256;
 
