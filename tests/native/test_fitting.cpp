@@ -47,6 +47,22 @@ Vec3 sample_vmf(std::mt19937& rng, const Vec3& mu, float kappa)
     return normalize_or(float(s * std::cos(phi)) * t + float(s * std::sin(phi)) * b + float(w) * mu, mu);
 }
 
+struct VmfCluster {
+    Vec3 mu;
+    float kappa;
+    int count;
+};
+
+// The first cluster's normals, then the second's, drawn with a fixed seed.
+std::vector<WeightedNormal> two_vmf_clusters(unsigned seed, const VmfCluster& first, const VmfCluster& second)
+{
+    std::mt19937 rng(seed);
+    std::vector<Vec3> normals;
+    for (const VmfCluster& c : {first, second})
+        for (int i = 0; i < c.count; ++i) normals.push_back(sample_vmf(rng, c.mu, c.kappa));
+    return unit_samples(normals);
+}
+
 TEST(SphericalEm, AllNormalsEqualGiveOneSaturatedLobe)
 {
     const auto samples = unit_samples(std::vector<Vec3>(64, Vec3{0.3f, -0.2f, 0.93f}));
@@ -94,12 +110,8 @@ TEST(SphericalEm, HorizonNormalsStayFinite)
 
 TEST(SphericalEm, RecoversAKnownTwoLobeMixture)
 {
-    std::mt19937 rng(7);
     const Vec3 a = normalize_or({0.5f, 0.0f, 0.8f}, {}), b = normalize_or({-0.3f, 0.4f, 0.8f}, {});
-    std::vector<Vec3> normals;
-    for (int i = 0; i < 3000; ++i) normals.push_back(sample_vmf(rng, a, 80.0f));
-    for (int i = 0; i < 1000; ++i) normals.push_back(sample_vmf(rng, b, 200.0f));
-    const auto samples = unit_samples(normals);
+    const auto samples = two_vmf_clusters(7, {a, 80.0f, 3000}, {b, 200.0f, 1000});
     std::vector<VmfLobe> lobes = farthest_point_seeds({}, samples, 2);
     fit_vmf_mixture(samples, lobes, {200, 1e-9});
     if (lobes[0].alpha < lobes[1].alpha) std::swap(lobes[0], lobes[1]);
@@ -127,12 +139,8 @@ TEST(SphericalEm, DeadLobesArePrunedNotLeftAsNaN)
 // EM reaches as well, since responsibilities across the gap are ~0.
 TEST(SphericalKmeans, SeparatedClustersGiveEachClustersOwnLobeAsEmDoes)
 {
-    std::mt19937 rng(11);
     const Vec3 a = normalize_or({0.6f, 0.0f, 0.8f}, {}), b = normalize_or({-0.5f, 0.3f, 0.8f}, {});
-    std::vector<Vec3> normals;
-    for (int i = 0; i < 48; ++i) normals.push_back(sample_vmf(rng, a, 400.0f));
-    for (int i = 0; i < 16; ++i) normals.push_back(sample_vmf(rng, b, 900.0f));
-    const auto samples = unit_samples(normals);
+    const auto samples = two_vmf_clusters(11, {a, 400.0f, 48}, {b, 900.0f, 16});
     std::vector<VmfLobe> kmeans = farthest_point_seeds({}, samples, 2), em = kmeans;
     const int steps = spherical_kmeans(samples, kmeans, 10);
     EXPECT_LT(steps, 10);  // stops once the assignment is stable
