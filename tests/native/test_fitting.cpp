@@ -163,7 +163,8 @@ TEST(SphericalKmeans, LimitsAntipodalEmptyAndOneSample)
 {
     // Antipodal normals split into two saturated lobes; a third seed that no sample joins gets α = 0.
     const auto antipodal = unit_samples({{0, 0, 1}, {0, 0, -1}, {0, 0, 1}});
-    std::vector<VmfLobe> lobes = {{1.0f / 3, {0, 0, 1}, 10.0f}, {1.0f / 3, {0, 0, -1}, 10.0f}, {1.0f / 3, {1, 0, 0}, 10.0f}};
+    std::vector<VmfLobe> lobes = {
+        {1.0f / 3, {0, 0, 1}, 10.0f}, {1.0f / 3, {0, 0, -1}, 10.0f}, {1.0f / 3, {1, 0, 0}, 10.0f}};
     spherical_kmeans(antipodal, lobes, 5);
     EXPECT_NEAR(lobes[0].alpha, 2.0f / 3, 1e-6f);
     EXPECT_NEAR(lobes[1].alpha, 1.0f / 3, 1e-6f);

@@ -30,9 +30,9 @@ namespace {
 // holds each as a lobe).
 constexpr double saturated_resultant()
 {
-    double r = 1.0 - 1.0 / double(kKappaMax);
-    for (int i = 0; i < 20; ++i)
-        r -= (r * (3.0 - r * r) - double(kKappaMax) * (1.0 - r * r)) / (3.0 - 3.0 * r * r + 2.0 * double(kKappaMax) * r);
+    const double k = kKappaMax;
+    double r = 1.0 - 1.0 / k;
+    for (int i = 0; i < 20; ++i) r -= (r * (3.0 - r * r) - k * (1.0 - r * r)) / (3.0 - 3.0 * r * r + 2.0 * k * r);
     return r + 1e-12;
 }
 constexpr double kSaturatedResultant = saturated_resultant();

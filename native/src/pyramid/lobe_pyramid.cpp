@@ -116,7 +116,7 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
                 std::min(fit_settings.em.max_iterations, kmeans ? kKmeansSteps : kOneStartIterations);
         }
         // EM seeds from the children's lobes only where a texel has more samples than lobes.
-        const bool seeded = largest_footprint(map.width, map.height, l) > uint64_t(slots);
+        const bool seeded = footprint > uint64_t(slots);
         // Texels of no more fine normals than slots (level 1 at 4 lobes) hold them exactly: no
         // seeds, no EM, no refinement; without a budget nothing is scored either.
         const bool exact = !seeded && !budgeted;
