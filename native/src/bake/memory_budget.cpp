@@ -43,10 +43,11 @@ MemoryEstimate estimate_bake_memory(int width, int height, const SourceLayout& s
     uint64_t pyramid = normals + pixels;
     // The largest working set of the fit: at level l each busy worker gathers one texel's
     // footprint (min(2^l, w) x min(2^l, h) fine normals) and EM copies it into four float arrays;
-    // a budgeted fit copies it once more to subsample it. The hierarchical fit gathers wherever a
-    // texel's children do not cover it (any level of a 1 x N map), and holds two levels' bins.
-    const uint64_t per_sample =
-        sizeof(WeightedNormal) + 4 * sizeof(float) + (settings.fit.tolerance > 0.0f ? sizeof(WeightedNormal) : 0);
+    // a budgeted fit copies it once more to subsample it, and the farthest-sample seeding keeps a
+    // distance per sample. The hierarchical fit gathers wherever a texel's children do not cover
+    // it (any level of a 1 x N map), and holds two levels' bins.
+    const uint64_t per_sample = sizeof(WeightedNormal) + 4 * sizeof(float) + sizeof(float) +
+                                (settings.fit.tolerance > 0.0f ? sizeof(WeightedNormal) : 0);
     const bool hierarchical = settings.method == FitMethod::hierarchical;
     uint64_t working = 0, finer_bins = 0;
     const int levels = pyramid_level_count(width, height, settings);
