@@ -60,7 +60,7 @@ typedef enum ndfb_fit_method {
     NDFB_FIT_PER_LEVEL = 0,    /* every level from all the fine normals it covers (Han §7.1): the
                                   reference the default is measured against */
     NDFB_FIT_HIERARCHICAL = 1  /* every level from the binned normals of the level below (default):
-                                  as accurate, 2-3x faster (README, "Speed") */
+                                  as accurate, 4-5x faster (README, "Speed of a bake") */
 } ndfb_fit_method;
 typedef enum ndfb_representation {
     NDFB_REPR_VMF_MIXTURE = 0, /* the budgeted vMF mixture (what bake writes) */
@@ -95,7 +95,9 @@ typedef struct ndfb_fit_options {
     ndfb_wrap wrap;
     int32_t align;                /* non-zero: aligned lobes (eq. 23) for hardware filtering, default 1 */
     float alignment_strength;     /* C of eq. 23, default 0 (slots are reordered, lobes not pulled) */
-    uint32_t max_iterations;      /* EM iterations per texel at most, default 10 (hierarchical: at most 5 on binned levels) */
+    uint32_t max_iterations;      /* EM iterations per texel at most, default 10 (hierarchical, unrefined:
+                                     one k-means step on footprints of at most 64 fine normals, at
+                                     most 3 iterations up to 1024, 5 above) */
     ndfb_fit_method method;       /* default NDFB_FIT_HIERARCHICAL */
     uint32_t threads;             /* 0: all cores */
     ndfb_progress_fn progress;
@@ -111,13 +113,15 @@ typedef struct ndfb_fit_options {
        n levels, and the fit of each level costs about as much as any other. */
     uint32_t max_levels;
     /* EM starts per texel: 1 seeds EM from the finer level's lobes only (Han §7.1); 2 (default)
-       also from the farthest-apart samples where a texel has more than 64, keeping the likelier
-       fit (lower error on wide footprints, where the finer level's lobes trap EM). */
+       also from the farthest-apart samples where a texel has more than 64 (the hierarchical fit,
+       unrefined: on footprints of more than 1024 fine normals), keeping the likelier fit (lower
+       error on wide footprints, where the finer level's lobes trap EM). */
     uint32_t starts;
     /* Non-zero: after EM, move every texel's lobes to where their convolved mixture is closest to
        the exact effective BRDF of `brdf` (Levenberg-Marquardt on the relative L2 error; see
        README "Refining for the BRDF"). Lower error for that BRDF (a fifth less on a 1024² fBm map
-       at GGX roughness 0.3) at about 60x the fitting time; default 0. */
+       at GGX roughness 0.3) at 100-300x the fitting time (a refined fit also skips the
+       hierarchical fit's shortcuts for texels of few normals); default 0. */
     int32_t refine;
 } ndfb_fit_options;
 
