@@ -137,8 +137,8 @@ TEST(HierarchicalFit, MatchesThePerLevelReferenceOnEveryPattern)
         const LobePyramid hierarchical = build_lobe_pyramid(map, PyramidSettings{}, {});
         double h = 0.0, r = 0.0;
         for (int level = 1; level < hierarchical.level_count(); ++level) {
-            h += measure_level(hierarchical, level, brdf, {}, 32, 0, false).fit.mean;
-            r += measure_level(per_level, level, brdf, {}, 32, 0, false).fit.mean;
+            h += measure_level(hierarchical, level, brdf, 32, 0, false).fit.mean;
+            r += measure_level(per_level, level, brdf, 32, 0, false).fit.mean;
         }
         std::printf("%-9s hierarchical %.4f  per-level %.4f  (%+.1f%%)\n", pattern_name(pattern), h, r,
                     100.0 * (h / r - 1.0));

@@ -355,7 +355,7 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
     // Levels are measured on every core, each from its own sample of texels.
     std::vector<LevelStats> stats(size_t(pyramid.level_count()));
     parallel_rows(pyramid.level_count(), settings.threads, [&](int level) {
-        stats[size_t(level)] = measure_level(pyramid, level, settings.brdf, settings.fit, kReportTexelsPerLevel,
+        stats[size_t(level)] = measure_level(pyramid, level, settings.brdf, kReportTexelsPerLevel,
                                              kReportSampleCap, settings.align && settings.alignment_strength > 0.0f);
     }, [&](double fraction) { return !progress || progress("measure", fraction); });
     timings.measure = seconds_since(start);

@@ -31,9 +31,11 @@ void texel_reference_samples(const NormalMap& map, WrapMode wrap, int level, int
     subsample_footprint(out, sample_cap);
 }
 
-LevelStats measure_level(const LobePyramid& pyramid, int level, const BaseBrdf& brdf,
-                         const TexelFitSettings& fit, int max_texels, int sample_cap, bool measure_alignment)
+LevelStats measure_level(const LobePyramid& pyramid, int level, const BaseBrdf& brdf, int max_texels,
+                         int sample_cap, bool measure_alignment)
 {
+    const TexelFitSettings fit =
+        level_fit_settings(pyramid.settings, pyramid.source.width, pyramid.source.height, level);
     LevelStats stats;
     stats.level = level;
     stats.size = pyramid.size(level);

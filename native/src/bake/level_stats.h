@@ -39,8 +39,9 @@ void texel_reference_samples(const NormalMap& map, WrapMode wrap, int level, int
                              std::vector<WeightedNormal>& out);
 
 // `max_texels` = 0 measures every texel. `measure_alignment` adds independent_fit (one extra fit
-// per measured texel).
-LevelStats measure_level(const LobePyramid& pyramid, int level, const BaseBrdf& brdf,
-                         const TexelFitSettings& fit, int max_texels, int sample_cap, bool measure_alignment);
+// per measured texel, from its fine normals and its children's lobes, with the settings the pyramid
+// fitted that level with: level_fit_settings).
+LevelStats measure_level(const LobePyramid& pyramid, int level, const BaseBrdf& brdf, int max_texels,
+                         int sample_cap, bool measure_alignment);
 
 }  // namespace ndfbake

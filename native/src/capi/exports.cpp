@@ -374,8 +374,8 @@ NDFB_API ndfb_status ndfb_pyramid_level_stats(ndfb_context ctx, ndfb_pyramid p, 
         require(ctx && out, "ndfb_pyramid_level_stats: ctx and out must not be null");
         const LobePyramid& pyramid = pyramid_of(p);
         require_level(pyramid, level);
-        const LevelStats s = measure_level(pyramid, int(level), to_brdf(raw(brdf), brdf_parameter), TexelFitSettings{},
-                                           int(max_texels), kReportSampleCap, false);
+        const LevelStats s = measure_level(pyramid, int(level), to_brdf(raw(brdf), brdf_parameter), int(max_texels),
+                                           kReportSampleCap, false);
         *out = {};
         out->width = uint32_t(s.size.width);
         out->height = uint32_t(s.size.height);

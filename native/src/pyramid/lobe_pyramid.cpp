@@ -50,6 +50,21 @@ std::vector<VmfLobe> LobePyramid::texel_lobes(int level, int x, int y) const
 
 int LobePyramid::lobe_count(int level, int x, int y) const { return int(texel_lobes(level, x, y).size()); }
 
+TexelFitSettings level_fit_settings(const PyramidSettings& settings, int width, int height, int level)
+{
+    TexelFitSettings fit = settings.fit;
+    if (settings.method != FitMethod::hierarchical || level < 1) return fit;
+    if (binned_level(level)) fit.em.max_iterations = std::min(fit.em.max_iterations, kBinnedIterations);
+    const uint64_t footprint = largest_footprint(width, height, level);
+    if (!settings.refine && footprint <= kOneStartFootprint) {
+        fit.two_starts = false;
+        const bool kmeans = footprint <= kKmeansFootprint;
+        if (kmeans) fit.solver = TexelSolver::spherical_kmeans;
+        fit.em.max_iterations = std::min(fit.em.max_iterations, kmeans ? kKmeansSteps : kOneStartIterations);
+    }
+    return fit;
+}
+
 int pyramid_level_count(int width, int height, const PyramidSettings& settings)
 {
     const int all = level_count(width, height);
@@ -105,21 +120,13 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
         const LobeLevel& finer = pyramid.levels[size_t(l - 1)];
         const bool binned = hierarchical && binned_level(l);
         bins = binned ? BinnedLevel(level.size) : BinnedLevel();
-        TexelFitSettings fit_settings = settings.fit;
-        if (binned) fit_settings.em.max_iterations = std::min(fit_settings.em.max_iterations, kBinnedIterations);
-        const uint64_t footprint = largest_footprint(map.width, map.height, l);
-        if (hierarchical && !settings.refine && footprint <= kOneStartFootprint) {
-            fit_settings.two_starts = false;
-            const bool kmeans = footprint <= kKmeansFootprint;
-            if (kmeans) fit_settings.solver = TexelSolver::spherical_kmeans;
-            fit_settings.em.max_iterations =
-                std::min(fit_settings.em.max_iterations, kmeans ? kKmeansSteps : kOneStartIterations);
-        }
+        const TexelFitSettings fit_settings = level_fit_settings(settings, map.width, map.height, l);
         // EM seeds from the children's lobes only where a texel has more samples than lobes.
-        const bool seeded = footprint > uint64_t(slots);
+        const bool seeded = largest_footprint(map.width, map.height, l) > uint64_t(slots);
         // Texels of no more fine normals than slots (level 1 at 4 lobes) hold them exactly: no
-        // seeds, no EM, no refinement; without a budget nothing is scored either.
-        const bool exact = !seeded && !budgeted;
+        // seeds, no EM, no refinement; without a budget nothing is scored either. (Never a binned
+        // level, whose texels cover more normals than kMaxLobes: their bins are kept below.)
+        const bool exact = !seeded && !budgeted && !binned;
         parallel_rows(level.size.height, settings.threads, [&](int y) {
             std::vector<WeightedNormal> samples, scored, refined_normals;
             std::vector<VmfLobe> children, child(static_cast<size_t>(slots)), lobes;

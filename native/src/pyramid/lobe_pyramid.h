@@ -20,12 +20,14 @@ enum class FitMethod {
     per_level,
     // Every level from the sufficient statistics of the level below: each texel's normals binned
     // by direction (pyramid/normal_bins.h), a texel's bins the sum of its children's, and EM run
-    // on the bins. EM sees at most kMaxBinSamples samples per texel whatever its footprint, so
-    // the levels above 4 cost a fraction of a per-level fit's.
+    // on the bins. EM sees at most kMaxBinSamples samples per texel whatever its footprint
+    // (kRefinedBinSamples in a refined fit), so the levels above 4 cost a fraction of a
+    // per-level fit's.
     hierarchical,
 };
 
-// How the hierarchical fit fits a texel, by how many fine normals its footprint holds. Up to
+// How the hierarchical fit fits a texel, by how many fine normals its footprint holds (the levels
+// named are a square map's at 4 lobes or more). Up to
 // kKmeansFootprint (levels 2–3: 330,000 of a 2048² map's 1.4 million fitted texels): one step of
 // spherical k-means from the children's lobes (each normal joins the nearest seed, each lobe is
 // its normals' vMF); there the seeds sit on the texel's few normals (at level 2 they are the fine
@@ -78,6 +80,10 @@ struct PyramidSettings {
     // Levels fitted, from level 0 up; 0: every level down to 1×1 (pyramid_level_count()).
     int max_levels = 0;
 };
+
+// What build_lobe_pyramid fits the texels of `level` of a width × height map with: settings.fit,
+// with the hierarchical fit's iteration caps and shortcuts for that level's footprint.
+TexelFitSettings level_fit_settings(const PyramidSettings& settings, int width, int height, int level);
 
 // The levels a pyramid of a width × height map has under `settings`.
 int pyramid_level_count(int width, int height, const PyramidSettings& settings);
