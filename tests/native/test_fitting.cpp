@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <limits>
 #include <random>
 
 #include "bake/level_stats.h"
@@ -173,11 +175,13 @@ TEST(SphericalKmeans, LimitsAntipodalEmptyAndOneSample)
     EXPECT_EQ(lobes[1].kappa, kKappaMax);
     expect_valid_lobes(lobes);
     // Normals that cancel inside one lobe: R = 0 gives κ = kKappaMin and keeps the old direction.
-    const auto cancelling = unit_samples({{1, 0, 0.001f}, {-1, 0, 0.001f}});
-    std::vector<VmfLobe> one = {{1.0f, {0, 0, 1}, 100.0f}};
+    const auto cancelling = unit_samples({{1, 0, 0}, {-1, 0, 0}});
+    std::vector<VmfLobe> one = {{1.0f, {0, 0.6f, 0.8f}, 100.0f}};
     spherical_kmeans(cancelling, one, 3);
     EXPECT_EQ(one[0].alpha, 1.0f);
-    EXPECT_LT(one[0].kappa, 0.01f);
+    EXPECT_EQ(one[0].kappa, kKappaMin);
+    EXPECT_EQ(one[0].mu.y, 0.6f);
+    EXPECT_EQ(one[0].mu.z, 0.8f);
     expect_valid_lobes(one);
     // One sample, one lobe: the sample itself.
     const auto single = unit_samples({{0.3f, 0.4f, 0.866f}});
@@ -283,9 +287,22 @@ INSTANTIATE_TEST_SUITE_P(Sizes, PyramidHardCases,
                          ::testing::Values(std::pair{1, 1}, std::pair{1, 9}, std::pair{3, 5}, std::pair{4097, 3},
                                            std::pair{64, 64}));
 
+// Fills and frees blocks the size of each level's lobes, so that the next pyramid's levels likely
+// reuse memory that holds `poison`.
+void poison_heap(int w, int h, int slots, float poison)
+{
+    std::vector<std::vector<float>> blocks;
+    for (int l = 1; l < level_count(w, h); ++l) {
+        const LevelSize size = level_size(w, h, l);
+        blocks.emplace_back(size_t(size.width) * size_t(size.height) * size_t(slots) * sizeof(VmfLobe) / sizeof(float),
+                            poison);
+    }
+}
+
 // Level arrays are allocated unfilled (LobeLevel::lobes): the fit must write every slot of every
 // texel itself. Without alignment (which rewrites every slot) an empty slot must be exactly the
-// empty lobe, not whatever the allocation held (fresh pages are zero: μ = 0 would show it).
+// empty lobe, not what the allocation held: fresh pages hold zeros (μ = 0 shows), and reused
+// memory differs between two fits made after different poison.
 TEST_P(PyramidHardCases, TheFitWritesEverySlotOfEveryTexel)
 {
     const auto [w, h] = GetParam();
@@ -297,8 +314,15 @@ TEST_P(PyramidHardCases, TheFitWritesEverySlotOfEveryTexel)
             settings.wrap = wrap;
             settings.align = false;
             settings.fit.max_lobes = 6;  // more slots than many texels have distinct normals
+            poison_heap(w, h, settings.fit.max_lobes, std::numeric_limits<float>::quiet_NaN());
             const LobePyramid pyramid = build_lobe_pyramid(map, settings, {});
+            poison_heap(w, h, settings.fit.max_lobes, 0.5f);
+            const LobePyramid again = build_lobe_pyramid(map, settings, {});
             for (int level = 1; level < pyramid.level_count(); ++level) {
+                const auto& a = pyramid.levels[size_t(level)].lobes;
+                const auto& b = again.levels[size_t(level)].lobes;
+                ASSERT_EQ(a.size(), b.size());
+                EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(VmfLobe)), 0) << "level " << level;
                 const LevelSize size = pyramid.size(level);
                 std::vector<VmfLobe> lobes(static_cast<size_t>(pyramid.slots));
                 for (int y = 0; y < size.height; ++y)
