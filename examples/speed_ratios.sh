@@ -27,10 +27,13 @@ seconds() {  # runs "$@" (its errors shown, a failure ends the script), prints i
 }
 
 per_level=(--method per-level --starts 1 --iterations 10)
+[ "$rounds" -ge 1 ] || { echo "speed_ratios.sh: ROUNDS must be at least 1" >&2; exit 2; }
 for round in $(seq "$rounds"); do
-  echo "decode $(seconds oiiotool "$map" --printstats)" >>"$work/walls"
-  echo "default $(seconds "$ndfbake" bake "$map" --out "$work/default-$round" --quiet)" >>"$work/walls"
-  echo "per-level $(seconds "$ndfbake" bake "$map" --out "$work/per-level-$round" --quiet "${per_level[@]}")" >>"$work/walls"
+  # Each time into a variable first: inside echo's argument a failure would not stop the script.
+  t=$(seconds oiiotool "$map" --printstats); echo "decode $t" >>"$work/walls"
+  t=$(seconds "$ndfbake" bake "$map" --out "$work/default-$round" --quiet); echo "default $t" >>"$work/walls"
+  t=$(seconds "$ndfbake" bake "$map" --out "$work/per-level-$round" --quiet "${per_level[@]}")
+  echo "per-level $t" >>"$work/walls"
   "$ndfbake" bake "$map" --out "$work/default-unaligned-$round" --quiet --no-align >/dev/null
   "$ndfbake" bake "$map" --out "$work/per-level-unaligned-$round" --quiet --no-align "${per_level[@]}" >/dev/null
 done
