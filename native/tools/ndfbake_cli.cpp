@@ -52,7 +52,8 @@ bake options:
                        samples, keeping the likelier (the hierarchical fit: above level 5);
                        1: from the finer level's lobes (Han 7.1)
   --refine             after EM, refine every texel's lobes against the effective BRDF of
-                       --brdf (lower error for that BRDF; 100-300x the fitting time)
+                       --brdf (lower error for that BRDF; 100-300x the fitting time). EM then
+                       fits every level in full (no k-means; one start only up to 64 samples)
   --no-align           fit texels independently (no lobe alignment across texels and levels)
   --threads N          worker threads (default: all cores)
   --max-memory SIZE    refuse a map whose bake would need more memory than SIZE bytes (K, M,
