@@ -24,31 +24,6 @@ double mean_resultant_length(double kappa)
 
 namespace {
 
-// The resultant length past which Banerjee's κ exceeds kKappaMax, by Newton's method on
-// R(3 − R²) − κ(1 − R²) = 0 (increasing on (0, 1)), plus a margin far above rounding: from there
-// on kappa_from_resultant returns the cap without its division. Every fine normal asks (level 1
-// holds each as a lobe).
-constexpr double saturated_resultant()
-{
-    const double k = kKappaMax;
-    double r = 1.0 - 1.0 / k;
-    for (int i = 0; i < 20; ++i) r -= (r * (3.0 - r * r) - k * (1.0 - r * r)) / (3.0 - 3.0 * r * r + 2.0 * k * r);
-    return r + 1e-12;
-}
-constexpr double kSaturatedResultant = saturated_resultant();
-
-}  // namespace
-
-float kappa_from_resultant(double r)
-{
-    if (!(r > 0.0)) return kKappaMin;  // also catches NaN
-    if (r >= kSaturatedResultant) return kKappaMax;
-    const double kappa = r * (3.0 - r * r) / (1.0 - r * r);
-    return float(std::clamp(kappa, double(kKappaMin), double(kKappaMax)));
-}
-
-namespace {
-
 // Solves g(R) = R(3 − R²) − k(1 − R²) = 0 on (0, 1): g(0) = −k < 0 < 2 = g(1), and g is
 // increasing there, so bisection is safe; Newton from the bracket then converges quickly.
 double solve_resultant(double k)
@@ -69,13 +44,31 @@ double solve_resultant(double k)
     return r;
 }
 
+// The resultant whose Banerjee κ is kKappaMax, solved once: every level-0 texel is a lobe of
+// κ = kKappaMax, and every fine normal's resultant saturates.
+double resultant_at_kappa_max()
+{
+    static const double r = solve_resultant(kKappaMax);
+    return r;
+}
+
+// Past resultant_at_kappa_max() plus this margin (far above rounding) Banerjee's κ exceeds the
+// cap: kappa_from_resultant returns it without the division.
+constexpr double kSaturationMargin = 1e-12;
+
 }  // namespace
+
+float kappa_from_resultant(double r)
+{
+    if (!(r > 0.0)) return kKappaMin;  // also catches NaN
+    if (r >= resultant_at_kappa_max() + kSaturationMargin) return kKappaMax;
+    const double kappa = r * (3.0 - r * r) / (1.0 - r * r);
+    return float(std::clamp(kappa, double(kKappaMin), double(kKappaMax)));
+}
 
 double resultant_from_kappa(float kappa)
 {
-    // Every level-0 texel is a lobe of κ = kKappaMax: solve for it once.
-    static const double at_kappa_max = solve_resultant(kKappaMax);
-    if (kappa >= kKappaMax) return at_kappa_max;
+    if (kappa >= kKappaMax) return resultant_at_kappa_max();
     return solve_resultant(std::max(double(kappa), double(kKappaMin)));
 }
 
