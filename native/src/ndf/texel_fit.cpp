@@ -27,7 +27,6 @@ float nearest_seed_distance(const Vec3& n, std::span<const VmfLobe> seeds)
 std::vector<VmfLobe> fit_from_seeds(std::span<const WeightedNormal> samples, std::span<const VmfLobe> child_lobes,
                                     int count, const TexelFitSettings& settings)
 {
-    const bool few_samples = samples.size() <= size_t(kSecondStartMinSamples);
     const EmSettings& em = settings.em;
     std::vector<VmfLobe> from_children = farthest_point_seeds(child_lobes, samples, count);
     if (settings.solver == TexelSolver::spherical_kmeans) {
@@ -35,6 +34,7 @@ std::vector<VmfLobe> fit_from_seeds(std::span<const WeightedNormal> samples, std
         drop_light_lobes(from_children, 0.0f);
         return from_children;
     }
+    const bool few_samples = samples.size() <= size_t(kSecondStartMinSamples);
     const double children_fit = fit_vmf_mixture(samples, from_children, em).mean_log_likelihood;
     if (!settings.two_starts || few_samples) {
         drop_light_lobes(from_children, 0.0f);
