@@ -64,14 +64,16 @@ public:
     float eval(float cos_theta) const;
     // f at many cosines at once, as ConvolvedLobe::eval_many.
     void eval_many(std::span<const float> cos_theta, std::span<float> value) const;
-    // f convolved with a normalized vMF of concentration κ about μ, as a function of c = ω·μ:
+    // f convolved with a normalized vMF of concentration κ about μ, as a function of c = ω·μ,
+    // where 1/κ below is convolution_inverse_kappa(κ) (vmf.h: 0 at the cap, a single direction,
+    // which leaves f as it is):
     // - Blinn-Phong: s' = κs/(κ + s) (eq. 20).
     // - GGX: amplitude · D(c; α') with α'² = α² + kGgxVmfWidening/κ (α' ≤ 1) and amplitude =
     //   ∫D_α dω / ∫D_α' dω, which keeps the lobe's integral over the sphere (convolution with a
     //   normalized lobe does). Measured against numerical convolution (tests/native/test_convolution):
     //   relative L2 error at most 0.39 for κ ≥ 5 and every α in [0.02, 1] (0.31 for α ≤ 0.7; at
     //   α = 1 no wider lobe exists); up to 0.88 below, where the NDF is nearly uniform and no
-    //   hemispherical GGX lobe has its shape. The error falls to 0.03 by κ = 1e5.
+    //   hemispherical GGX lobe has its shape; 0.05 at κ = 1e5, past the cap, left unwidened.
     // - Beckmann: amplitude · D(c; m') with m'² = m² + 2/κ (eq. 21: σ'² = σ² + 1/(2κ) with m² = 4σ²;
     //   5% error at κ = 50), m' ≤ 1 and amplitude = ∫D_m dω / ∫D_m' dω, as for GGX.
     // - Lambert: its Legendre series, every band scaled by the vMF's A_l(κ).

@@ -90,10 +90,15 @@ void vmf_legendre_coefficients(double kappa, int lmax, double* out)
 {
     // Ratios ρ_l = I_{l+1/2}/I_{l−1/2} from the continued fraction ρ_l = 1/((2l+1)/κ + ρ_{l+1}),
     // run downwards from far above lmax (Miller): upward recurrence loses all digits for small κ.
+    if (kappa >= double(kKappaMax)) {
+        // The continued fraction would have to start beyond κ: the asymptotic form instead.
+        for (int l = 0; l <= lmax; ++l) out[l] = std::exp(-0.5 * l * (l + 1) / kappa);
+        return;
+    }
     const double k = std::max(kappa, double(kKappaMin));
     // The fraction only settles where (2l+1)/κ ≳ 1, so start beyond κ: a start below it
     // oscillates between two wrong ratios instead of converging.
-    const int start = lmax + 40 + int(std::min(k, double(kKappaMax)));
+    const int start = lmax + 40 + int(k);
     double rho = 0.0;
     std::vector<double> ratios(size_t(lmax) + 1, 0.0);
     for (int l = start; l >= 1; --l) {
