@@ -231,39 +231,32 @@ TEST(SingleLobeBaselines, NaiveShadesTheRenormalizedMean)
 TEST(SingleLobeBaselines, ToksvigMatchesHisExponentAndTheBeckmannWidening)
 {
     const auto pyramid = build_baseline("toksvig", two_facets(kFacetTilt), WrapMode::clamp);
-    // Toksvig: s' = sR/(R + s(1 − R)) = 32·0.8660254/(0.8660254 + 32·0.1339746) = 5.377774, that
-    // is 1/s' = 1/s + σ² with σ² = (1 − R)/R, and f(ω) = (s'+1)/(2π) (ω·ẑ)^s'. The library's rules
-    // widen by the spread beyond the κ cap's (vmf.h): σ² − 1e-4, s' = 1/(1/32 + 0.1547005 − 1e-4)
-    // = 5.380668.
-    EXPECT_NEAR(32.0 * kFacetR / (kFacetR + 32.0 * (1.0 - kFacetR)), 5.377774, 1e-6);
-    const double s_prime = 1.0 / (1.0 / 32.0 + (1.0 - kFacetR) / kFacetR - 1e-4);
-    EXPECT_NEAR(s_prime, 5.380668, 1e-6);
+    // Toksvig: s' = sR/(R + s(1 − R)) = 32·0.8660254/(0.8660254 + 32·0.1339746) = 5.377774, and
+    // f(ω) = (s'+1)/(2π) (ω·ẑ)^s'.
+    const double s_prime = 32.0 * kFacetR / (kFacetR + 32.0 * (1.0 - kFacetR));
+    EXPECT_NEAR(s_prime, 5.377774, 1e-6);
     const BaseBrdf bp = BaseBrdf::blinn_phong(32.0f);
     EXPECT_NEAR(eval_at(*pyramid, 1, bp, {0, 0, 1}), (s_prime + 1.0) / (2.0 * kPi), 1e-4);
     const double off = 0.5;  // radians from the mean normal
     EXPECT_NEAR(eval_at(*pyramid, 1, bp, {float(std::sin(off)), 0, float(std::cos(off))}),
                 (s_prime + 1.0) / (2.0 * kPi) * std::pow(std::cos(off), s_prime), 1e-4);
-    // Beckmann m = 0.25 (eq. 21): m'² = m² + 2σ², σ² = (1 − R)/R − 1e-4 = 0.1546005, so
-    // m'² = 0.371701 (m' = 0.609673), and the amplitude keeping the sphere integral
-    // I(m) = 1 + (√π/2) m erfcx(1/m): I(0.25) = 1.030353, I(m') = 1.162121, A = 0.886614;
-    // D(ẑ) = A/(π m'²).
-    const double m2 = 0.0625 + 2.0 * ((1.0 - kFacetR) / kFacetR - 1e-4);
-    EXPECT_NEAR(m2, 0.371701, 1e-6);
-    const double amplitude =
-        BaseBrdf::beckmann_sphere_integral(0.25) / BaseBrdf::beckmann_sphere_integral(std::sqrt(m2));
-    EXPECT_NEAR(amplitude, 0.886614, 1e-6);
-    EXPECT_NEAR(eval_at(*pyramid, 1, BaseBrdf::beckmann(0.25f), {0, 0, 1}), amplitude / (kPi * m2), 1e-4);
+    // Beckmann m = 0.25 (eq. 21): m'² = m² + 2σ², σ² = (1 − R)/R = 0.1547005, so m'² = 0.371901
+    // (m' = 0.609837), and the amplitude keeping the sphere integral I(m) = 1 + (√π/2) m erfcx(1/m):
+    // I(0.25) = 1.030353, I(m') = 1.162199, A = 0.886555; D(ẑ) = A/(π m'²) = 0.758802.
+    const double m2 = 0.0625 + 2.0 * (1.0 - kFacetR) / kFacetR;
+    EXPECT_NEAR(m2, 0.371901, 1e-6);
+    EXPECT_NEAR(BaseBrdf::beckmann_sphere_integral(0.25) / BaseBrdf::beckmann_sphere_integral(std::sqrt(m2)),
+                0.886555, 1e-6);
+    EXPECT_NEAR(eval_at(*pyramid, 1, BaseBrdf::beckmann(0.25f), {0, 0, 1}), 0.886555 / (kPi * m2), 1e-4);
 }
 
 TEST(SingleLobeBaselines, SingleVmfUsesBanerjeesKappa)
 {
     const auto pyramid = build_baseline("single-vmf", two_facets(kFacetTilt), WrapMode::clamp);
-    // κ = (3R − R³)/(1 − R²) = (2.5980762 − 0.6495191)/0.25 = 7.7942286; s' = κs/(κ + s), with
-    // 1/κ taken beyond the cap's (1/κ − 1e-4): 1/s' = 1/32 + 0.1283001 − 1e-4, s' = 6.271556.
+    // κ = (3R − R³)/(1 − R²) = (2.5980762 − 0.6495191)/0.25 = 7.7942286; s' = κs/(κ + s) = 6.2676254.
     const double kappa = (3.0 * kFacetR - kFacetR * kFacetR * kFacetR) / (1.0 - kFacetR * kFacetR);
     EXPECT_NEAR(kappa, 7.7942286, 1e-6);
-    const double s_prime = 1.0 / (1.0 / 32.0 + 1.0 / kappa - 1e-4);
-    EXPECT_NEAR(s_prime, 6.271556, 1e-6);
+    const double s_prime = kappa * 32.0 / (kappa + 32.0);
     EXPECT_NEAR(eval_at(*pyramid, 1, BaseBrdf::blinn_phong(32.0f), {0, 0, 1}), (s_prime + 1.0) / (2.0 * kPi), 1e-4);
 }
 

@@ -30,7 +30,7 @@ double shader_alpha(double alpha, double resultant, double widening, double offs
 
 TEST(LobeShader, SingleFloatLobesShadeAsTheLibraryWidensThem)
 {
-    // A single-float file holds r at resultant_from_kappa(κ) (|r| = 1 at the cap); the shader's
+    // A single-float file holds r at lobe_resultant(κ) (|r| = 1 at the cap); the shader's
     // decoding must give the α' the library's rule gives, the cap's lobe unwidened included.
     const std::string shader = lobe_shader_glsl(4, PixelPrecision::single);
     const double widening = shader_constant(shader, "NDFB_GGX_VMF_WIDENING");
@@ -38,7 +38,7 @@ TEST(LobeShader, SingleFloatLobesShadeAsTheLibraryWidensThem)
     for (float roughness : {0.05f, 0.2f, 0.5f}) {
         const BaseBrdf ggx = BaseBrdf::ggx(roughness);
         for (float kappa : {2.0f, 50.0f, 1000.0f, 5000.0f, 9999.0f, kKappaMax}) {
-            const double stored = kappa >= kKappaMax ? 1.0 : resultant_from_kappa(kappa);
+            const double stored = lobe_resultant(kappa);
             const double alpha = double(roughness) * double(roughness);
             EXPECT_NEAR(shader_alpha(alpha, stored, widening, offset), ggx.convolved(kappa).lobe_parameter(), 2e-5)
                 << "roughness " << roughness << " kappa " << kappa;

@@ -48,7 +48,7 @@ void encode_lobe(const VmfLobe& lobe, float* rgba)
     }
     // κ at the cap stands for a single direction (level 0's fine normals; texels whose normals
     // agree): EM stops at kKappaMax for its numerics, the texture stores the limit |r| = 1.
-    const float r = lobe.kappa >= kKappaMax ? 1.0f : float(resultant_from_kappa(lobe.kappa));
+    const float r = float(lobe_resultant(lobe.kappa));
     rgba[0] = lobe.alpha;
     rgba[1] = lobe.alpha * r * lobe.mu.x;
     rgba[2] = lobe.alpha * r * lobe.mu.y;

@@ -8,7 +8,7 @@ namespace ndfbake {
 
 namespace {
 
-// @SLOTS@: lobe slots, @WIDENING@: kGgxVmfWidening, @RESOLUTION@: decoder_inverse_kappa_offset.
+// @SLOTS@: lobe slots, @WIDENING@: kGgxVmfWidening, @RESOLUTION@: kHalfInvKappaResolution or 0.
 // The decoding is addon/ndfbake/nodes.py's lobe group; tests/blender/test_glsl_export.py runs this
 // file against the same rule with the add-on's constants.
 constexpr std::string_view kShader = R"glsl(// ndfbake.glsl: shading with the filtered normal distribution stored in this folder's lobe
@@ -36,9 +36,8 @@ constexpr std::string_view kShader = R"glsl(// ndfbake.glsl: shading with the fi
 // widened by the lobe's spread kappa_j: alpha_j'^2 = alpha^2 + NDFB_GGX_VMF_WIDENING / kappa_j,
 // alpha' <= 1, where alpha is the material's GGX alpha (roughness^2 in Blender's and Disney's
 // convention); kappa_j comes from |r_j| = R by Banerjee's approximation
-// kappa = R(3 - R^2) / (1 - R^2), with NDFB_INV_KAPPA_RESOLUTION taken off 1/kappa (the
-// spread the files cannot tell from a single direction: half floats' rounding of |r|, or for
-// single floats the bake's own limit, a 0.6-degree spread). The lobes are weighted by alpha_j / sum(alpha). Like the Blender add-on's
+// kappa = R(3 - R^2) / (1 - R^2), with NDFB_INV_KAPPA_RESOLUTION (the storage's rounding of |r|)
+// taken off 1/kappa. The lobes are weighted by alpha_j / sum(alpha). Like the Blender add-on's
 // node group, each lobe is normalized about its own normal; the library's error measure also
 // scales a widened lobe by the integral ratio of D_alpha and D_alpha' (brdf.h), which changes
 // the filtered distribution by a few percent (relative L2 0.100 with it against 0.106 without,
@@ -174,7 +173,8 @@ std::string lobe_shader_glsl(int slots, PixelPrecision precision)
     std::string shader(kShader);
     replace_all(shader, "@SLOTS@", std::to_string(slots));
     replace_all(shader, "@WIDENING@", glsl_float(kGgxVmfWidening));
-    replace_all(shader, "@RESOLUTION@", glsl_float(decoder_inverse_kappa_offset(precision)));
+    replace_all(shader, "@RESOLUTION@",
+                glsl_float(precision == PixelPrecision::half ? kHalfInvKappaResolution : 0.0f));
     return shader;
 }
 

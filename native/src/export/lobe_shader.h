@@ -14,7 +14,7 @@ inline constexpr const char* kLobeShaderFileName = "ndfbake.glsl";
 // GLSL (330 core and later, GLSL ES 3.0, Vulkan GLSL: no #version line, for inclusion in an
 // engine's shader) for `slots` lobe textures stored at `precision`: the decoding of a lobe texel
 // into a weight, a tangent-space normal and a widened GGX α (the same rule as the Blender add-on's
-// node group, with kGgxVmfWidening and decoder_inverse_kappa_offset), and the filtered GGX
+// node group, with kGgxVmfWidening and kHalfInvKappaResolution), and the filtered GGX
 // distribution, GGX specular and Lambert terms summed over the lobes.
 std::string lobe_shader_glsl(int slots, PixelPrecision precision);
 

@@ -7,8 +7,6 @@
 #include <variant>
 #include <vector>
 
-#include "math/vmf.h"
-
 namespace ndfbake {
 
 using AttributeValue = std::variant<int, float, std::string>;
@@ -26,15 +24,6 @@ enum class PixelPrecision { half, single };
 // subtract it from 1/κ so that a sharp lobe reads sharp rather than as noise in the roughness
 // (for roughness 0.05, up to 0.14 at 1% of texels); for single floats the rounding is negligible.
 inline constexpr float kHalfInvKappaResolution = 4e-4f;
-
-// What a decoder takes off 1/κ so that it widens as the library's rules do (vmf.h,
-// convolution_inverse_kappa: by the spread beyond the cap's 1/kKappaMax): 1/kKappaMax for single
-// floats; for half floats kHalfInvKappaResolution, which is larger (no decoder can tell a spread
-// below it from the rounding of one direction).
-inline float decoder_inverse_kappa_offset(PixelPrecision precision)
-{
-    return precision == PixelPrecision::half ? kHalfInvKappaResolution : 1.0f / kKappaMax;
-}
 
 // Both lossless. zlib (at its fastest level) for dense texels; run-length for images that are
 // mostly runs of equal texels, such as a level-0 lobe slot, zero wherever the texel's one lobe

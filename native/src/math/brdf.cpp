@@ -212,31 +212,31 @@ ConvolvedLobe BaseBrdf::convolved(float kappa) const
 {
     ConvolvedLobe lobe;
     lobe.kind_ = int(kind_);
-    const float spread = convolution_inverse_kappa(kappa);  // 1/κ, 0 for a single direction
+    kappa = convolution_kappa(kappa);  // +∞ for a single direction
     switch (kind_) {
     case BrdfKind::lambert: {
         const auto& a = clamped_cosine_legendre();
         std::array<double, kLambertBands + 1> attenuation{};
-        vmf_legendre_coefficients(1.0 / double(spread), kLambertBands, attenuation.data());
+        vmf_legendre_coefficients(double(kappa), kLambertBands, attenuation.data());
         for (int l = 0; l <= kLambertBands; ++l)
             lobe.lambert_bands_[size_t(l)] = float(a[size_t(l)] * attenuation[size_t(l)]);
         break;
     }
     case BrdfKind::blinn_phong:
-        lobe.parameter_ = parameter_ / (1.0f + parameter_ * spread);  // eq. 20: 1/s' = 1/s + 1/κ
+        lobe.parameter_ = parameter_ / (1.0f + parameter_ / kappa);  // eq. 20, κs/(κ + s), finite at κ = ∞
         break;
     case BrdfKind::ggx: {
         const float alpha = parameter_ * parameter_;
         // A lobe wider than α = 1 is beyond what Blender's roughness can express; the
         // amplitude then carries the spread the width cannot.
-        lobe.parameter_ = std::min(1.0f, std::sqrt(alpha * alpha + kGgxVmfWidening * spread));
+        lobe.parameter_ = std::min(1.0f, std::sqrt(alpha * alpha + kGgxVmfWidening / kappa));
         lobe.amplitude_ = float(ggx_sphere_integral(alpha) / ggx_sphere_integral(lobe.parameter_));
         break;
     }
     case BrdfKind::beckmann:
         // Eq. 21, capped like GGX's: past m = 1 a Beckmann lobe piles up at the horizon instead
         // of widening (relative error 354 at κ = 1e-3 uncapped); the amplitude keeps the integral.
-        lobe.parameter_ = std::min(kMaxBeckmannSlope, std::sqrt(parameter_ * parameter_ + 2.0f * spread));
+        lobe.parameter_ = std::min(kMaxBeckmannSlope, std::sqrt(parameter_ * parameter_ + 2.0f / kappa));
         lobe.amplitude_ = float(beckmann_sphere_integral(parameter_) / beckmann_sphere_integral(lobe.parameter_));
         break;
     }

@@ -65,8 +65,7 @@ public:
     // f at many cosines at once, as ConvolvedLobe::eval_many.
     void eval_many(std::span<const float> cos_theta, std::span<float> value) const;
     // f convolved with a normalized vMF of concentration κ about μ, as a function of c = ω·μ,
-    // where 1/κ below is convolution_inverse_kappa(κ) (vmf.h: 0 at the cap, a single direction,
-    // which leaves f as it is):
+    // with κ = ∞ at the cap (convolution_kappa, vmf.h: a single direction leaves f as it is):
     // - Blinn-Phong: s' = κs/(κ + s) (eq. 20).
     // - GGX: amplitude · D(c; α') with α'² = α² + kGgxVmfWidening/κ (α' ≤ 1) and amplitude =
     //   ∫D_α dω / ∫D_α' dω, which keeps the lobe's integral over the sphere (convolution with a

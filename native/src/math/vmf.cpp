@@ -72,6 +72,11 @@ double resultant_from_kappa(float kappa)
     return solve_resultant(std::max(double(kappa), double(kKappaMin)));
 }
 
+double lobe_resultant(float kappa)
+{
+    return kappa >= kKappaMax ? 1.0 : resultant_from_kappa(kappa);
+}
+
 double log_vmf_normalizer_shifted(double kappa)
 {
     constexpr double log_4pi = 2.5310242469692907;  // log(4π)

@@ -71,8 +71,8 @@ void lobes_of_samples(std::span<const WeightedNormal> samples, std::vector<VmfLo
 VmfLobe merge_lobes(const VmfLobe& a, const VmfLobe& b)
 {
     const float alpha = a.alpha + b.alpha;
-    const Vec3 r = (a.alpha * float(resultant_from_kappa(a.kappa)) * a.mu +
-                    b.alpha * float(resultant_from_kappa(b.kappa)) * b.mu) / alpha;
+    const Vec3 r = (a.alpha * float(lobe_resultant(a.kappa)) * a.mu + b.alpha * float(lobe_resultant(b.kappa)) * b.mu) /
+                   alpha;
     return {alpha, normalize_or(r, a.mu), kappa_from_resultant(length(r))};
 }
 
