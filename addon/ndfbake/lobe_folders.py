@@ -23,8 +23,8 @@ folders, when the file is closed (another file opened, quit) or through delete_u
 Otherwise a folder stays after a Revert or a re-bake; the Revert report names it, and the panel's
 "Delete Unused Lobe Folders" (unused_folders) lists the folders beside the .blend that this file
 does not use, neither as it is now nor as it was last opened or saved (a re-bake not saved yet
-leaves the saved file using the old folder), for the user to delete once no other .blend needs
-them. Only the files a bake writes are deleted, then the folder if it is empty. A .blend written
+leaves the saved file using the old folder) nor through an undo step (a folder this session's
+bake filled, until the file is closed), for the user to delete once no other .blend needs them. Only the files a bake writes are deleted, then the folder if it is empty. A .blend written
 by a script with bpy.data.libraries.write is no save to Blender's handlers: save the file (or keep
 its folders) before the session closes, or a background session deletes folders it uses.
 """
@@ -133,8 +133,14 @@ def release(absolute):
 
 
 def filled(relative):
-    """A bake's files went into `relative` (new_folder's name): not to be handed out again."""
+    """A bake's files went into `relative` (new_folder's name): not to be handed out again, nor
+    offered for deletion while the file is open (an undo step may bring the bake back)."""
     _filled.add(relative.casefold())
+
+
+def forget_undo_steps():
+    """The file was closed, and with it the undo steps that could name this session's folders."""
+    _filled.clear()
 
 
 # ---- the session's folders: a background Blender deletes those no save used at close ------------
@@ -215,11 +221,14 @@ def delete_folders(folders):
 def unused_folders():
     """The lobe folders beside this .blend (by their suffix) that nothing in this file uses, for
     the user to delete (ndfbake.delete_unused_folders): other .blend files may still use them.
+    A folder this session's bake filled is not offered until the file is closed: Ctrl-Z after a
+    Revert or a re-bake brings back the nodes that read it.
     Also the pending folders of bakes that no longer run (left by a crash or a killed Blender)."""
     if not bpy.data.filepath:
         return []
     parent = os.path.dirname(os.path.abspath(bpy.data.filepath))
-    used = _referenced() | (_on_disk or set())
+    undoable = {_key(bpy.path.abspath(relative)) for relative in _filled}
+    used = _referenced() | (_on_disk or set()) | undoable
     try:
         names = sorted(os.listdir(parent))
     except OSError:  # the .blend's folder went away: nothing beside it to list
@@ -287,7 +296,7 @@ def _on_save_post(*_):
 @persistent
 def _on_load_pre(*_):
     _close_session()
-    _filled.clear()  # the undo steps that could name them went with the file
+    forget_undo_steps()
 
 
 @persistent

@@ -308,8 +308,9 @@ class NDFBAKE_OT_revert(bpy.types.Operator):
                                   "closed" % (material.name, folder))
         else:
             self.report({"INFO"}, "ndfbake: %s reverted; its lobe textures stay in %s for Ctrl-Z and for the .blend "
-                                  "files that may use them (saved, autosaved, quit.blend): Delete Unused Lobe Folders "
-                                  "in the ndfbake panel removes them" % (material.name, folder or "?"))
+                                  "files that may use them (saved, autosaved, quit.blend): once this file is reopened, "
+                                  "Delete Unused Lobe Folders in the ndfbake panel removes them"
+                        % (material.name, folder or "?"))
         return {"FINISHED"}
 
 

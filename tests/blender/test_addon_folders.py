@@ -286,6 +286,30 @@ def test_undo_after_a_save_finds_the_files():
         h.expect(len(_images_load(material)) == 4, "the first bake's images after a save and Ctrl-Z")
 
 
+def test_delete_unused_folders_keeps_what_ctrl_z_brings_back():
+    from ndfbake import bake, lobe_folders, material_scan
+    with h.scratch_dir() as directory:
+        h.baked_scene(directory)
+        bpy.ops.ed.undo_push(message="ndfbake test scene")
+        _undoable(bpy.ops.ndfbake.bake, "bake")
+        folder = material_scan.record(bpy.data.materials["Bumpy"])["folder"]
+        bpy.ops.wm.save_mainfile()  # a save used the folder: closing the file keeps it
+        _undoable(bpy.ops.ndfbake.revert, "revert")
+        bpy.ops.wm.save_mainfile()  # neither the file nor its saved copy uses it now; Ctrl-Z does
+        offered = [os.path.basename(f) for f in lobe_folders.unused_folders()]
+        h.expect(offered == [], "offered while Ctrl-Z can bring the bake back: %s" % offered)
+        h.expect(bpy.ops.ndfbake.delete_unused_folders() in ({"FINISHED"}, {"CANCELLED"}), "the operator did not run")
+        h.expect(bpy.ops.ed.undo() == {"FINISHED"}, "Ctrl-Z after the revert")
+        material = bpy.data.materials["Bumpy"]
+        h.expect(bake.is_baked(material) and len(_images_load(material)) == 4,
+                 "Ctrl-Z brought back a bake whose files in %s were deleted" % folder)
+        _undoable(bpy.ops.ndfbake.revert, "revert again")
+        bpy.ops.wm.save_mainfile()
+        h.close_file()  # the undo steps went with the file: now the folder is offered
+        offered = [os.path.basename(f) for f in lobe_folders.unused_folders()]
+        h.expect(offered == [folder[2:]], "offered after the file was closed: %s" % offered)
+
+
 def test_delete_unused_folders_deletes_only_what_this_file_does_not_use():
     from ndfbake import bake, lobe_folders
     with h.scratch_dir() as directory:
@@ -322,4 +346,5 @@ if __name__ == "__main__":
            test_a_damaged_record_on_another_material_stops_no_bake,
            test_folders_other_blend_files_use_are_kept,
            test_undo_after_a_save_finds_the_files,
+           test_delete_unused_folders_keeps_what_ctrl_z_brings_back,
            test_delete_unused_folders_deletes_only_what_this_file_does_not_use])

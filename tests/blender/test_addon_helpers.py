@@ -214,9 +214,12 @@ def listing(directory):
 
 def close_file():
     """What closing the .blend does to lobe folders (opening another file, File > Revert, quit:
-    lobe_folders' load_pre and exit handlers): deletes those the file as saved no longer uses."""
+    lobe_folders' load_pre and exit handlers): deletes those the file as saved no longer uses, and
+    the undo steps that could bring back a bake go."""
     from ndfbake import lobe_folders
-    return lobe_folders.delete_unused_folders()
+    outcome = lobe_folders.delete_unused_folders()
+    lobe_folders.forget_undo_steps()
+    return outcome
 
 
 def raised(error_type, call, failure):
