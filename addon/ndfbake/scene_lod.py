@@ -8,8 +8,8 @@ distance to the camera and the angle of view. The node group ("NDFB Level of Det
     level     = clamp(log2(footprint), 0, levels − 1)
 
 the side, in texels of the normal map, of the square a pixel covers on the surface: d is the
-distance to the camera; pixel_angle the angle a pixel subtends (a perspective camera) and
-pixel_size its width (an orthographic one); texels_per_unit the UV texel density from the
+distance to the camera; pixel_angle the angle a pixel's long side subtends (a perspective camera)
+and pixel_size its length (an orthographic one; non-square pixels: the pixel aspect); texels_per_unit the UV texel density from the
 library's tangent module (ndfb_texel_density, world space, times the map's size); θ the angle
 between the view ray and the surface, which stretches the footprint by 1/cos θ along one axis.
 STRETCH = 1 takes that long axis: the texel then holds every normal the pixel sees, so a few
@@ -83,44 +83,52 @@ def _sensor_fit(cam):
     return "sensor_height", "height"
 
 
-# The pixels across the spanned side, as footprint_driver's expressions say it.
-_SIDE_EXPRESSIONS = {"larger": "max(resx * ax, resy * ay)", "width": "resx * ax", "height": "resy * ay"}
-
-
 def camera_footprint(scene, camera_object):
-    """The pixel footprint of a camera at the scene's render resolution."""
+    """The pixel footprint of a camera at the scene's render resolution: the long side of a pixel
+    (non-square pixels: the pixel aspect stretches one side), as STRETCH = 1 takes the long axis."""
     render = scene.render
     scale = render.resolution_percentage / 100.0
-    width = render.resolution_x * scale * render.pixel_aspect_x
-    height = render.resolution_y * scale * render.pixel_aspect_y
+    aspect_x, aspect_y = render.pixel_aspect_x, render.pixel_aspect_y
+    # The sensor spans the chosen side in units of pixels times their aspect; a pixel's long side
+    # is max(aspect) such units.
+    width = render.resolution_x * scale * aspect_x
+    height = render.resolution_y * scale * aspect_y
     cam = camera_object.data
     sensor, side = _sensor_fit(cam)
-    pixels = max(1.0, {"larger": max(width, height), "width": width, "height": height}[side])
+    units = max(1.0, {"larger": max(width, height), "width": width, "height": height}[side] / max(aspect_x, aspect_y))
     location = tuple(camera_object.matrix_world.translation)
     if cam.type == "ORTHO":
-        return CameraFootprint(location, 0.0, cam.ortho_scale / pixels, cam.clip_end)
+        return CameraFootprint(location, 0.0, cam.ortho_scale / units, cam.clip_end)
     if cam.type == "PANO":
         # No single focal length: the angle a pixel subtends over the camera's field of view.
-        return CameraFootprint(location, 2.0 * math.pi / pixels, 0.0, cam.clip_end)
-    return CameraFootprint(location, getattr(cam, sensor) / max(cam.lens, 1e-3) / pixels, 0.0, cam.clip_end)
+        return CameraFootprint(location, 2.0 * math.pi / units, 0.0, cam.clip_end)
+    return CameraFootprint(location, getattr(cam, sensor) / max(cam.lens, 1e-3) / units, 0.0, cam.clip_end)
+
+
+# camera_footprint's sensor and units as a driver's simple expression: `fit` is the sensor fit's
+# enum index (AUTO 0, HORIZONTAL 1, VERTICAL 2), so that changing the fit after a bake is followed.
+_SENSOR_EXPRESSION = "(sh if fit == 2 else sw)"
+_UNITS_EXPRESSION = ("((max(resx * ax, resy * ay) if fit == 0 else (resx * ax if fit == 1 else resy * ay))"
+                     " * pct / 100 / max(ax, ay))")
 
 
 def footprint_driver(camera_object):
-    """How a driver recomputes camera_footprint as the camera and the resolution change:
-    (the group input it drives, a simple expression, [(variable, "CAMERA" or "SCENE", property
-    path)]), or None for a panoramic camera."""
+    """How a driver recomputes camera_footprint as the camera (lens, sensor size and fit, scale)
+    and the resolution (size, percentage, pixel aspect) change: (the group input it drives, a
+    simple expression, [(variable, "CAMERA" or "SCENE", property path)]), or None for a panoramic
+    camera."""
     cam = camera_object.data
     if cam.type not in {"PERSP", "ORTHO"}:
         return None
-    sensor, side = _sensor_fit(cam)
-    pixels = "(%s * pct / 100)" % _SIDE_EXPRESSIONS[side]
-    scene_vars = [("resx", "SCENE", "render.resolution_x"), ("resy", "SCENE", "render.resolution_y"),
-                  ("ax", "SCENE", "render.pixel_aspect_x"), ("ay", "SCENE", "render.pixel_aspect_y"),
-                  ("pct", "SCENE", "render.resolution_percentage")]
+    variables = [("fit", "CAMERA", "sensor_fit"),
+                 ("resx", "SCENE", "render.resolution_x"), ("resy", "SCENE", "render.resolution_y"),
+                 ("ax", "SCENE", "render.pixel_aspect_x"), ("ay", "SCENE", "render.pixel_aspect_y"),
+                 ("pct", "SCENE", "render.resolution_percentage")]
     if cam.type == "PERSP":
-        return ("Pixel Angle", "size / max(lens, 0.001) / " + pixels,
-                [("size", "CAMERA", sensor), ("lens", "CAMERA", "lens")] + scene_vars)
-    return "Pixel Size", "size / " + pixels, [("size", "CAMERA", "ortho_scale")] + scene_vars
+        return ("Pixel Angle", "%s / max(lens, 0.001) / max(1, %s)" % (_SENSOR_EXPRESSION, _UNITS_EXPRESSION),
+                [("sw", "CAMERA", "sensor_width"), ("sh", "CAMERA", "sensor_height"),
+                 ("lens", "CAMERA", "lens")] + variables)
+    return "Pixel Size", "size / max(1, %s)" % _UNITS_EXPRESSION, [("size", "CAMERA", "ortho_scale")] + variables
 
 
 def scene_cameras(scene):

@@ -61,6 +61,19 @@ def test_camera_footprint_is_the_pinhole_pixel_angle():
     scene.render.resolution_percentage = 50
     f = scene_lod.camera_footprint(scene, camera)
     h.expect(abs(f.pixel_angle - 24.0 / 50.0 / 100.0) < 1e-9, "50%% resolution: %r" % (f,))
+    # Non-square pixels: the long side of a pixel, from Blender's own projection matrix.
+    scene.render.resolution_percentage = 100
+    for fit, aspect in (("AUTO", (2.0, 1.0)), ("VERTICAL", (1.0, 2.0)), ("HORIZONTAL", (1.0, 3.0))):
+        camera.data.sensor_fit = fit
+        scene.render.pixel_aspect_x, scene.render.pixel_aspect_y = aspect
+        projection = camera.calc_matrix_camera(bpy.context.evaluated_depsgraph_get(), x=100, y=200,
+                                               scale_x=aspect[0], scale_y=aspect[1])
+        long_side = max(2.0 / 100 / projection[0][0], 2.0 / 200 / projection[1][1])  # tan θ ≈ θ per pixel
+        f = scene_lod.camera_footprint(scene, camera)
+        h.expect(abs(f.pixel_angle / long_side - 1.0) < 1e-6, "%s fit, pixel aspect %s: %r, the long side %r"
+                 % (fit, aspect, f.pixel_angle, long_side))
+    scene.render.pixel_aspect_x = scene.render.pixel_aspect_y = 1.0
+    scene.render.resolution_percentage = 50
     camera.data.type = "ORTHO"
     camera.data.ortho_scale = 7.0
     camera.data.sensor_fit = "AUTO"
@@ -217,7 +230,7 @@ def test_atlas_lookups_equal_bilinear_filtering_of_the_level_files():
 
 
 def test_a_bake_with_a_camera_writes_only_the_levels_it_reaches():
-    from ndfbake import bake, nodes
+    from ndfbake import bake, nodes, scene_lod
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="fbm", size=128)
         _resolution(64, 64)
@@ -245,6 +258,16 @@ def test_a_bake_with_a_camera_writes_only_the_levels_it_reaches():
         print("  pixel angle %.6f at 100%%, 50 mm; %.6f at 50%%, 25 mm" % (baked_angle, driven))
         h.expect(abs(driven - 4.0 * baked_angle) < 1e-7, "the driven pixel angle is %r, not 4x %r" % (
             driven, baked_angle))
+        # The sensor fit and the pixel aspect are followed too.
+        scene.camera.data.sensor_fit = "VERTICAL"
+        scene.render.pixel_aspect_x, scene.render.pixel_aspect_y = 1.0, 2.0
+        bpy.context.view_layer.update()
+        driven = material.node_tree.nodes["ndfbake"].inputs["Pixel Angle"].default_value
+        expected = scene_lod.camera_footprint(scene, scene.camera).pixel_angle
+        h.expect(abs(driven / expected - 1.0) < 1e-6, "driven %r after a sensor fit and aspect change, not %r"
+                 % (driven, expected))
+        scene.camera.data.sensor_fit = "AUTO"
+        scene.render.pixel_aspect_x = scene.render.pixel_aspect_y = 1.0
         scene.render.resolution_percentage = 100
         scene.camera.data.lens = 50.0
         h.expect(nodes.lobe_count(group.node_tree) == 2, "two lobes")
