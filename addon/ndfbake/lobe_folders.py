@@ -24,9 +24,10 @@ Otherwise a folder stays after a Revert or a re-bake; the Revert report names it
 "Delete Unused Lobe Folders" (unused_folders) lists the folders beside the .blend that this file
 does not use, neither as it is now nor as it was last opened or saved (a re-bake not saved yet
 leaves the saved file using the old folder) nor through an undo step (a folder this session's
-bake filled, until the file is closed), for the user to delete once no other .blend needs them. Only the files a bake writes are deleted, then the folder if it is empty. A .blend written
-by a script with bpy.data.libraries.write is no save to Blender's handlers: save the file (or keep
-its folders) before the session closes, or a background session deletes folders it uses.
+bake filled, until the file is closed), for the user to delete once no other .blend needs them.
+Only the files a bake writes are deleted, then the folder if it is empty. A .blend written by a
+script with bpy.data.libraries.write is no save to Blender's handlers: save the file (or keep its
+folders) before the session closes, or a background session deletes folders it uses.
 """
 import atexit
 import hashlib

@@ -9,9 +9,10 @@ distance to the camera and the angle of view. The node group ("NDFB Level of Det
 
 the side, in texels of the normal map, of the square a pixel covers on the surface: d is the
 distance to the camera; pixel_angle the angle a pixel's long side subtends (a perspective camera)
-and pixel_size its length (an orthographic one; non-square pixels: the pixel aspect); texels_per_unit the UV texel density from the
-library's tangent module (ndfb_texel_density, world space, times the map's size); θ the angle
-between the view ray and the surface, which stretches the footprint by 1/cos θ along one axis.
+and pixel_size its length (an orthographic one; the pixel aspect makes pixels non-square);
+texels_per_unit the UV texel density from the library's tangent module (ndfb_texel_density,
+world space, times the map's size); θ the angle between the view ray and the surface, which
+stretches the footprint by 1/cos θ along one axis.
 STRETCH = 1 takes that long axis: the texel then holds every normal the pixel sees, so a few
 samples per pixel (Cycles) see one distribution instead of glints from texel to texel, at the
 price of a wider distribution across the short axis, which for the statistically uniform
