@@ -10,7 +10,9 @@
  * - Normals are unit float3 in tangent space, +Z out of the surface, OpenGL convention (+Y up V),
  *   rows top to bottom as stored in image files.
  * - Option structs start with struct_size, from which the library reads only the fields the caller
- *   has; fill them with the matching *_init function first (and see NDFB_ABI_VERSION).
+ *   has; fill them with the matching *_init function first (and see NDFB_ABI_VERSION). The fields
+ *   a struct had when ABI 1 first shipped (all but those below an "added later" line) are always
+ *   read: a struct_size that does not cover them is NDFB_ERROR_INVALID_ARGUMENT.
  * - A context may be used by one thread at a time; separate contexts are independent.
  */
 #ifndef NDFBAKE_H
@@ -102,6 +104,7 @@ typedef struct ndfb_fit_options {
     uint32_t threads;             /* 0: all cores */
     ndfb_progress_fn progress;
     void* progress_user;
+    /* ---- added later: read only where struct_size covers them ---- */
     /* Memory a fit or bake may use (its estimated peak: the decoded map, the lobe pyramid, the
        largest working set of the fit, the texture being written). A larger job is refused up
        front with NDFB_ERROR_OUT_OF_MEMORY, before any pixel is read, with the estimate and the
@@ -130,6 +133,7 @@ typedef struct ndfb_write_options {
     ndfb_precision precision;     /* default half */
     const char* color_path;       /* optional base-colour image of the same size: per-lobe colour (eq. 22) */
     const char* source_name;      /* recorded in the files; default: the input path */
+    /* ---- added later: read only where struct_size covers it ---- */
     /* Non-zero: also write atlas_lobeJ.exr, every level of lobe slot J in one image, for renderers
        without MIP levels of their own: level 0 on the left, levels 1, 2, ... stacked top-down in a
        column to its right, each framed by a one-texel border of the texels the wrap mode puts

@@ -15,6 +15,7 @@
 #include <sched.h>
 #include <signal.h>
 #include <linux/capability.h>
+#include <sys/mman.h>
 #include <sys/mount.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
@@ -756,6 +757,110 @@ TEST_F(HostileInputs, OptionsOutOfRangeAreInvalidArgumentsAndWriteNothing)
     old.struct_size = uint32_t(offsetof(ndfb_fit_options, max_memory_bytes));
     old.max_memory_bytes = 1;
     EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("out old").c_str(), &decode_, &old, &write_), NDFB_OK) << error();
+}
+
+// Memory that ends where an inaccessible page begins: a struct placed at its end with struct_size
+// bytes is all the caller has, so a read of any field past struct_size kills the process.
+class GuardedMemory {
+public:
+    GuardedMemory()
+    {
+        page_ = size_t(::sysconf(_SC_PAGESIZE));
+        void* p = ::mmap(nullptr, 2 * page_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+        if (p == MAP_FAILED || ::mprotect(static_cast<char*>(p) + page_, page_, PROT_NONE) != 0) std::abort();
+        memory_ = static_cast<char*>(p);
+    }
+    ~GuardedMemory() { ::munmap(memory_, 2 * page_); }
+    GuardedMemory(const GuardedMemory&) = delete;
+    GuardedMemory& operator=(const GuardedMemory&) = delete;
+
+    // The first `bytes` bytes of `full` (struct_size set to `bytes`), ending at the guard page.
+    template <typename Options>
+    const Options* place(Options full, size_t bytes)
+    {
+        full.struct_size = uint32_t(bytes);
+        char* at = memory_ + page_ - bytes;
+        std::memcpy(at, &full, bytes);
+        return reinterpret_cast<const Options*>(at);
+    }
+
+private:
+    size_t page_ = 0;
+    char* memory_ = nullptr;
+};
+
+// Ends the (death-test) child with the call's status as exit code, and its message on stderr.
+[[noreturn]] void exit_with(ndfb_context ctx, ndfb_status status)
+{
+    std::fprintf(stderr, "%s: %s\n", ndfb_status_name(status), ndfb_last_error(ctx));
+    std::_Exit(int(status));
+}
+
+// ndfbake.h: the library "reads only the fields the caller has". A struct shorter than its first
+// ABI-1 layout holds fields the library must read, so it is refused, naming the struct, before
+// any of them is: each call runs in a child (EXPECT_EXIT) with the struct against a guard page,
+// where reading past struct_size would end it with SIGSEGV instead of exit code 1.
+TEST_F(HostileInputs, OptionStructsShorterThanTheirFirstLayoutAreRefusedUnread)
+{
+    using ::testing::ExitedWithCode;
+    const int inval = NDFB_ERROR_INVALID_ARGUMENT;
+    const float pixels[3] = {0.5f, 0.5f, 1.0f};
+    ndfb_normal_map map = nullptr;
+    ASSERT_EQ(ndfb_normal_map_from_pixels(ctx_, pixels, 3, 1, 1, 3, 0, &decode_, &map), NDFB_OK) << error();
+    ndfb_pyramid pyramid = nullptr;
+    ASSERT_EQ(ndfb_fit(ctx_, map, &fit_, &pyramid), NDFB_OK) << error();
+    ndfb_bench_options bench;
+    ndfb_bench_options_init(&bench);
+    ndfb_space_options space;
+    ndfb_space_options_init(&space);
+    const std::string out = path("out");
+    GuardedMemory guarded;
+
+    for (size_t bytes : {sizeof(uint32_t), offsetof(ndfb_decode_options, max_pixels)}) {
+        const auto* d = guarded.place(decode_, bytes);
+        ndfb_normal_map scratch = nullptr;
+        EXPECT_EXIT(exit_with(ctx_, ndfb_normal_map_from_pixels(ctx_, pixels, 3, 1, 1, 3, 0, d, &scratch)),
+                    ExitedWithCode(inval), "decode options.struct_size is not set: call ndfb_decode_options_init")
+            << bytes << " bytes";
+    }
+    for (size_t bytes : {sizeof(uint32_t), offsetof(ndfb_fit_options, threads), offsetof(ndfb_fit_options, progress_user)}) {
+        const auto* f = guarded.place(fit_, bytes);
+        ndfb_pyramid scratch = nullptr;
+        EXPECT_EXIT(exit_with(ctx_, ndfb_fit(ctx_, map, f, &scratch)), ExitedWithCode(inval),
+                    "fit options.struct_size is not set: call ndfb_fit_options_init")
+            << bytes << " bytes";
+    }
+    for (size_t bytes : {sizeof(uint32_t), offsetof(ndfb_write_options, source_name)}) {
+        const auto* w = guarded.place(write_, bytes);
+        EXPECT_EXIT(exit_with(ctx_, ndfb_pyramid_write(ctx_, pyramid, map, out.c_str(), &fit_, w)),
+                    ExitedWithCode(inval), "write options.struct_size is not set: call ndfb_write_options_init")
+            << bytes << " bytes";
+    }
+    for (size_t bytes : {sizeof(uint32_t), offsetof(ndfb_bench_options, progress_user)}) {
+        const auto* b = guarded.place(bench, bytes);
+        EXPECT_EXIT(exit_with(ctx_, ndfb_bench(ctx_, b, out.c_str())), ExitedWithCode(inval),
+                    "bench options.struct_size is not set: call ndfb_bench_options_init")
+            << bytes << " bytes";
+    }
+    for (size_t bytes : {sizeof(uint32_t), offsetof(ndfb_space_options, threads)}) {
+        const auto* o = guarded.place(space, bytes);
+        float in[3] = {0, 0, 1}, converted[3];
+        EXPECT_EXIT(exit_with(ctx_, ndfb_object_to_tangent(ctx_, nullptr, nullptr, 0, in, 1, 1, 3, o, converted, nullptr)),
+                    ExitedWithCode(inval), "space options.struct_size is not set: call ndfb_space_options_init")
+            << bytes << " bytes";
+    }
+    EXPECT_FALSE(fs::exists(out));
+
+    // The first layouts themselves, against the guard: accepted, and the fields added since
+    // (max_memory_bytes..refine, atlas) are not read, so this runs in the test's own process.
+    const auto* first_fit = guarded.place(fit_, offsetof(ndfb_fit_options, max_memory_bytes));
+    ndfb_pyramid refit = nullptr;
+    EXPECT_EQ(ndfb_fit(ctx_, map, first_fit, &refit), NDFB_OK) << error();
+    ndfb_pyramid_destroy(refit);
+    const auto* first_write = guarded.place(write_, offsetof(ndfb_write_options, atlas));
+    EXPECT_EQ(ndfb_pyramid_write(ctx_, pyramid, map, out.c_str(), &fit_, first_write), NDFB_OK) << error();
+    ndfb_pyramid_destroy(pyramid);
+    ndfb_normal_map_destroy(map);
 }
 
 // ---- API misuse ------------------------------------------------------------------------------

@@ -26,8 +26,8 @@ std::vector<std::string> split_list(const char* text)
 
 BenchSettings to_bench(const ndfb_bench_options* o)
 {
-    if (!o || o->struct_size < sizeof(uint32_t) || o->struct_size > sizeof(ndfb_bench_options))
-        throw Error(Status::invalid_argument, "bench options are not set: call ndfb_bench_options_init first");
+    // ndfb_bench_options has not grown since ABI 1 first shipped: every field is read.
+    require_struct_size(o, "bench options", sizeof(ndfb_bench_options), "ndfb_bench_options_init");
     if (o->map_count > 0 && !o->map_paths) throw Error(Status::invalid_argument, "bench: map_paths is null");
     if (o->synthetic_size > 4096) throw Error(Status::invalid_argument, "bench: synthetic_size must be at most 4096");
     BenchSettings s;

@@ -2,6 +2,7 @@
 // turns every exception into a status code plus the context's last-error text.
 #pragma once
 
+#include <cstddef>
 #include <exception>
 #include <mutex>
 #include <new>
@@ -52,6 +53,27 @@ private:
 
 inline constexpr const char* kDeadContextMessage =
     "the context was destroyed or was never created by ndfb_context_create";
+
+// Option structs only ever grow at their end, and `first_size` is the size of the struct as ABI 1
+// first shipped it: those fields every caller has, so they are read without looking at
+// struct_size; fields added since are read only where struct_size covers them. A struct_size
+// below first_size (or above the struct this library knows) comes from no header: the struct is
+// refused before any field past struct_size is touched, since the caller's memory may end there.
+template <typename Options>
+void require_struct_size(const Options* options, const char* name, size_t first_size, const char* init)
+{
+    if (!options) throw Error(Status::invalid_argument, std::string(name) + " is null");
+    const uint32_t size = options->struct_size;
+    if (size < first_size || size > sizeof(Options))
+        throw Error(Status::invalid_argument,
+                    std::string(name) + ".struct_size is not set: call " + init + " first (struct_size is " +
+                        std::to_string(size) + "; this library reads " + std::to_string(first_size) + " to " +
+                        std::to_string(sizeof(Options)) + " bytes)");
+}
+
+// The size of a struct up to and including `field`: the first_size of a struct whose later
+// fields begin after it.
+#define NDFB_SIZE_THROUGH(type, field) (offsetof(type, field) + sizeof(type::field))
 
 // Runs `body`, mapping every failure to a status and ctx's last-error text.
 template <typename Body>

@@ -52,19 +52,18 @@ int raw(const Enum& value)
     return v;
 }
 
-template <typename Options>
-void require_options(const Options* options, const char* name)
-{
-    require(options != nullptr, std::string(name) + " is null");
-    require(options->struct_size >= sizeof(uint32_t) && options->struct_size <= sizeof(Options),
-            std::string(name) + ".struct_size is not set: call its _init function first");
-}
+// What each option struct held when ABI 1 first shipped (require_struct_size): ndfb_decode_options
+// has never grown; ndfb_fit_options ended at progress_user (max_memory_bytes, max_levels, starts
+// and refine came later), ndfb_write_options at source_name (atlas came later).
+constexpr size_t kDecodeOptionsFirstSize = sizeof(ndfb_decode_options);
+constexpr size_t kFitOptionsFirstSize = NDFB_SIZE_THROUGH(ndfb_fit_options, progress_user);
+constexpr size_t kWriteOptionsFirstSize = NDFB_SIZE_THROUGH(ndfb_write_options, source_name);
 
 DecodeOptions to_decode(const ndfb_decode_options* o)
 {
     DecodeOptions d;
     if (!o) return d;
-    require_options(o, "decode options");
+    require_struct_size(o, "decode options", kDecodeOptionsFirstSize, "ndfb_decode_options_init");
     const int convention = raw(o->convention), srgb = raw(o->srgb);
     require(convention == NDFB_CONVENTION_OPENGL || convention == NDFB_CONVENTION_DIRECTX,
             "decode options: unknown convention " + std::to_string(convention));
@@ -96,7 +95,7 @@ WrapMode to_wrap(int wrap)
 
 PyramidSettings to_pyramid(const ndfb_fit_options* o)
 {
-    require_options(o, "fit options");
+    require_struct_size(o, "fit options", kFitOptionsFirstSize, "ndfb_fit_options_init");
     require(o->max_lobes >= 1 && o->max_lobes <= NDFB_MAX_LOBES,
             "max_lobes must be in 1.." + std::to_string(NDFB_MAX_LOBES) + ", got " + std::to_string(o->max_lobes));
     require(o->tolerance >= 0.0f && o->tolerance <= 1.0f,
@@ -118,7 +117,7 @@ PyramidSettings to_pyramid(const ndfb_fit_options* o)
     s.alignment_strength = o->alignment_strength;
     s.threads = int(o->threads);
     s.method = method == NDFB_FIT_HIERARCHICAL ? FitMethod::hierarchical : FitMethod::per_level;
-    // Added after ABI 1's first release: read only from callers whose struct has it.
+    // Added after ABI 1's first release: read only from callers whose struct has them.
     if (o->struct_size >= offsetof(ndfb_fit_options, max_memory_bytes) + sizeof(o->max_memory_bytes))
         s.max_memory_bytes = o->max_memory_bytes;
     if (o->struct_size >= offsetof(ndfb_fit_options, max_levels) + sizeof(o->max_levels)) {
@@ -137,7 +136,7 @@ WriteSettings to_write(const ndfb_write_options* o)
 {
     WriteSettings w;
     if (!o) return w;
-    require_options(o, "write options");
+    require_struct_size(o, "write options", kWriteOptionsFirstSize, "ndfb_write_options_init");
     const int precision = raw(o->precision);
     require(precision == NDFB_PRECISION_HALF || precision == NDFB_PRECISION_FLOAT,
             "unknown precision " + std::to_string(precision));

@@ -88,8 +88,8 @@ SpaceSettings to_space(const ndfb_space_options* o)
 {
     SpaceSettings s;
     if (!o) return s;
-    require(o->struct_size >= sizeof(uint32_t) && o->struct_size <= sizeof(ndfb_space_options),
-            "space options: struct_size is not set: call ndfb_space_options_init first");
+    // ndfb_space_options has not grown since ABI 1 first shipped: every field is read.
+    require_struct_size(o, "space options", sizeof(ndfb_space_options), "ndfb_space_options_init");
     s.padding = o->padding;
     s.threads = to_threads(o->threads);
     return s;
