@@ -196,6 +196,43 @@ TEST_F(BakeApi, RefiningForTheBrdfLowersEveryLevelsErrorAndSaysSo)
     EXPECT_NE(text.find("\"brdf\":\"blinn-phong:128\""), std::string::npos);
 }
 
+// Occurrences of `needle` in `text`.
+size_t count_of(const std::string& text, const std::string& needle)
+{
+    size_t n = 0;
+    for (size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + needle.size())) ++n;
+    return n;
+}
+
+// The error without alignment is measured (an independent refit) only where lobes are pulled
+// into alignment, and only above level 0. Elsewhere the report says null, not an error of 0 and
+// an alignment cost equal to the whole error.
+TEST_F(BakeApi, TheReportGivesNoErrorWithoutAlignmentItDidNotMeasure)
+{
+    const std::string input = synth_file(Pattern::fbm, 32, 32, "fbm.png");
+    const auto report_of = [&](const std::string& out) {
+        EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+        std::ifstream file(out + "/report.json");
+        std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+        std::erase_if(text, [](char c) { return std::isspace(static_cast<unsigned char>(c)); });
+        return text;
+    };
+    const std::string unmeasured = "\"error_without_alignment\":null,\"alignment_cost\":null";
+    const std::string measured = "\"error_without_alignment\":{\"mean\":";
+
+    ASSERT_EQ(fit_.alignment_strength, 0.0f);  // the default: slots reordered, lobes not pulled
+    const std::string plain = report_of(path("default"));
+    EXPECT_EQ(count_of(plain, "\"level\":"), 6u);
+    EXPECT_EQ(count_of(plain, unmeasured), 6u) << plain;
+    EXPECT_EQ(count_of(plain, measured), 0u) << plain;
+
+    fit_.alignment_strength = 0.5f;
+    const std::string pulled = report_of(path("pulled"));
+    EXPECT_EQ(count_of(pulled, unmeasured), 1u) << pulled;  // level 0
+    EXPECT_EQ(count_of(pulled, measured), 5u) << pulled;
+    EXPECT_EQ(count_of(pulled, measured + "0,"), 0u) << pulled;  // fbm: no level fits exactly
+}
+
 TEST_F(BakeApi, TheReportNamesTheSlotsNoTexelUsesAndTheirTexturesAreZero)
 {
     const std::string input = synth_file(Pattern::bumps, 32, 32, "bumps.png");

@@ -414,7 +414,8 @@ TEST(PyramidAlignment, TheIndependentRefitUsesTheLevelsOwnFitSettings)
     const LobePyramid pyramid = build_lobe_pyramid(map, settings, {});
     for (int level = 1; level <= 3; ++level) {
         const LevelStats stats = measure_level(pyramid, level, BaseBrdf::ggx(0.5f), 0, 0, true);
-        EXPECT_EQ(stats.independent_fit.mean, stats.fit.mean) << "level " << level;
+        ASSERT_TRUE(stats.independent_fit.has_value()) << "level " << level;
+        EXPECT_EQ(stats.independent_fit->mean, stats.fit.mean) << "level " << level;
     }
 }
 

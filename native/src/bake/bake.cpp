@@ -224,6 +224,9 @@ std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded,
         .value("directions", error_direction_count(settings.brdf))
         .value("texels_per_level", kReportTexelsPerLevel)
         .value("fine_normals_per_texel", kReportSampleCap)
+        .value("without_alignment", "error_without_alignment is an independent refit of the same texels, "
+                                    "alignment_cost the error minus its mean; measured above level 0 when lobes "
+                                    "are pulled into alignment (aligned, alignment_strength > 0), null otherwise")
         .end_object();
 
     // Slots with no lobe at any level (possible with a tolerance): their textures are all zero.
@@ -242,8 +245,13 @@ std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded,
         json.end_array();
         json.value("measured_texels", s.measured_texels);
         write_summary(json, "error", s.fit);
-        write_summary(json, "error_without_alignment", s.independent_fit);
-        json.value("alignment_cost", double(s.fit.mean) - double(s.independent_fit.mean));
+        // Not measured (see "error_measure"): null, never a made-up 0 beside the real error.
+        if (s.independent_fit) {
+            write_summary(json, "error_without_alignment", *s.independent_fit);
+            json.value("alignment_cost", double(s.fit.mean) - double(s.independent_fit->mean));
+        } else {
+            json.null("error_without_alignment").null("alignment_cost");
+        }
         write_summary(json, "error_naive", s.naive);
         write_summary(json, "error_single_vmf", s.single_vmf);
         write_summary(json, "error_toksvig", s.toksvig);

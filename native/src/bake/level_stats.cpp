@@ -72,7 +72,7 @@ LevelStats measure_level(const LobePyramid& pyramid, int level, const BaseBrdf& 
     }
     stats.measured_texels = int(measured);
     stats.fit = summarize(fit_errors);
-    stats.independent_fit = summarize(independent_errors);
+    if (!independent_errors.empty()) stats.independent_fit = summarize(independent_errors);
     stats.naive = summarize(naive_errors);
     stats.single_vmf = summarize(single_errors);
     stats.toksvig = summarize(toksvig_errors);

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "math/brdf.h"
@@ -28,7 +29,9 @@ struct LevelStats {
     std::array<uint64_t, kMaxLobes + 1> lobe_histogram{};  // over every texel of the level
     int measured_texels = 0;
     ErrorSummary fit;                // the pyramid's (aligned) lobes
-    ErrorSummary independent_fit;    // the same budget without alignment: alignment's cost
+    // The same budget without alignment, for alignment's cost: measured only when asked for
+    // (measure_level's measure_alignment) and above level 0, which has no finer level to align to.
+    std::optional<ErrorSummary> independent_fit;
     ErrorSummary naive;              // plain MIP-mapping: the base BRDF about the mean normal
     ErrorSummary single_vmf;
     ErrorSummary toksvig;
@@ -38,9 +41,9 @@ struct LevelStats {
 void texel_reference_samples(const NormalMap& map, WrapMode wrap, int level, int x, int y, int sample_cap,
                              std::vector<WeightedNormal>& out);
 
-// `max_texels` = 0 measures every texel. `measure_alignment` adds independent_fit (one extra fit
-// per measured texel, from its fine normals and its children's lobes, with the settings the pyramid
-// fitted that level with: level_fit_settings).
+// `max_texels` = 0 measures every texel. `measure_alignment` adds independent_fit above level 0
+// (one extra fit per measured texel, from its fine normals and its children's lobes, with the
+// settings the pyramid fitted that level with: level_fit_settings).
 LevelStats measure_level(const LobePyramid& pyramid, int level, const BaseBrdf& brdf, int max_texels,
                          int sample_cap, bool measure_alignment);
 

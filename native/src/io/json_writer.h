@@ -1,4 +1,4 @@
-// A minimal streaming JSON writer for reports: objects, arrays, strings, numbers, booleans.
+// A minimal streaming JSON writer for reports: objects, arrays, strings, numbers, booleans, null.
 #pragma once
 
 #include <cmath>
@@ -33,6 +33,7 @@ public:
         return *this;
     }
     JsonWriter& value(const char* key, float f) { return value(key, double(f)); }
+    JsonWriter& null(const char* key) { prefix(key); out_ += "null"; return *this; }
 
     const std::string& str() const { return out_; }
 
