@@ -5,8 +5,11 @@
  * - Every call returns an ndfb_status; NDFB_OK is 0. On failure, ndfb_last_error() on the same
  *   context gives a one-line message naming the input and the problem. No call throws, aborts or
  *   leaves a partial file behind.
- * - Objects are opaque handles created and destroyed by the library. Buffers are caller-owned and
- *   passed with explicit element counts; a count that does not match is NDFB_ERROR_INVALID_ARGUMENT.
+ * - Objects are opaque handles created and destroyed by the library. A call that creates one sets
+ *   its output handle to NULL when it fails, for any reason (so a variable that still holds an
+ *   object must not be passed as the output: the object would be lost). Buffers are caller-owned
+ *   and passed with explicit element counts; a count that does not match is
+ *   NDFB_ERROR_INVALID_ARGUMENT.
  * - Normals are unit float3 in tangent space, +Z out of the surface, OpenGL convention (+Y up V),
  *   rows top to bottom as stored in image files.
  * - Option structs start with struct_size, from which the library reads only the fields the caller

@@ -1002,6 +1002,49 @@ TEST_F(HostileInputs, NullHandlesNullBuffersAndWrongSizesAreErrors)
     ndfb_normal_map_destroy(map);
 }
 
+// ndfbake.h: a call that creates an object writes NULL to its output handle on any failure, from
+// the first argument check (a null or destroyed context included) to a failure deep in the call,
+// so the handle can always be passed to its destroy function afterwards.
+TEST_F(HostileInputs, AFailedCallLeavesItsOutputHandleNull)
+{
+    const std::string input = synth_png("in.png", 8);
+    ndfb_normal_map map = nullptr;
+    ASSERT_EQ(ndfb_normal_map_load(ctx_, input.c_str(), &decode_, &map), NDFB_OK) << error();
+    ndfb_context dead = nullptr;
+    ASSERT_EQ(ndfb_context_create(&dead), NDFB_OK);
+    ndfb_context_destroy(dead);
+    const float pixels[3] = {0.5f, 0.5f, 1.0f};
+    ndfb_fit_options cancelling = fit_;
+    cancelling.progress = +[](void*, const char*, float) -> int { return 1; };
+
+    // A value no call returns: a failure must overwrite it.
+    const auto stale_map = reinterpret_cast<ndfb_normal_map>(0x1);
+    const auto stale_pyramid = reinterpret_cast<ndfb_pyramid>(0x1);
+    for (ndfb_context ctx : {ndfb_context(nullptr), dead, ctx_}) {
+        const std::string which = ctx == nullptr ? "null context" : ctx == dead ? "destroyed context" : "context";
+        ndfb_normal_map m = stale_map;
+        EXPECT_NE(ndfb_normal_map_load(ctx, nullptr, &decode_, &m), NDFB_OK);
+        EXPECT_EQ(m, nullptr) << "load, " << which;
+        m = stale_map;
+        EXPECT_NE(ndfb_normal_map_from_pixels(ctx, pixels, 2, 1, 1, 3, 0, &decode_, &m), NDFB_OK);
+        EXPECT_EQ(m, nullptr) << "from_pixels, " << which;
+        m = stale_map;
+        EXPECT_NE(ndfb_synthesize(ctx, "plaid", 4, 4, 0, &m), NDFB_OK);
+        EXPECT_EQ(m, nullptr) << "synthesize, " << which;
+        ndfb_pyramid p = stale_pyramid;
+        EXPECT_NE(ndfb_fit(ctx, nullptr, &fit_, &p), NDFB_OK);
+        EXPECT_EQ(p, nullptr) << "fit, " << which;
+    }
+    // Failures after the arguments were accepted: a missing file, a cancelled fit.
+    ndfb_normal_map m = stale_map;
+    EXPECT_EQ(ndfb_normal_map_load(ctx_, path("missing.png").c_str(), &decode_, &m), NDFB_ERROR_FILE_NOT_FOUND);
+    EXPECT_EQ(m, nullptr);
+    ndfb_pyramid p = stale_pyramid;
+    EXPECT_EQ(ndfb_fit(ctx_, map, &cancelling, &p), NDFB_ERROR_CANCELLED);
+    EXPECT_EQ(p, nullptr);
+    ndfb_normal_map_destroy(map);
+}
+
 TEST_F(HostileInputs, ADestroyedContextIsRefusedNotUsed)
 {
     const std::string input = synth_png("in.png", 8);

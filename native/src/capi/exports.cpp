@@ -266,9 +266,9 @@ NDFB_API void ndfb_write_options_init(ndfb_write_options* o)
 NDFB_API ndfb_status ndfb_normal_map_load(ndfb_context ctx, const char* path, const ndfb_decode_options* options,
                                           ndfb_normal_map* out)
 {
+    if (out) *out = nullptr;  // before any check: NULL after every failure (ndfbake.h)
     return guarded(ctx, [&] {
         require(ctx && path && out, "ndfb_normal_map_load: ctx, path and out must not be null");
-        *out = nullptr;
         auto map = std::make_unique<ndfb_normal_map_s>();
         map->decoded = decode_normal_map(path, to_decode(options));
         *out = map.release();
@@ -279,9 +279,9 @@ NDFB_API ndfb_status ndfb_normal_map_from_pixels(ndfb_context ctx, const float* 
                                                  uint32_t height, uint32_t channels, int32_t signed_encoding,
                                                  const ndfb_decode_options* options, ndfb_normal_map* out)
 {
+    if (out) *out = nullptr;  // before any check: NULL after every failure (ndfbake.h)
     return guarded(ctx, [&] {
         require(ctx && pixels && out, "ndfb_normal_map_from_pixels: ctx, pixels and out must not be null");
-        *out = nullptr;
         require(width > 0 && height > 0 && width <= 65536 && height <= 65536,
                 "image size must be 1..65536 per side, got " + std::to_string(width) + "x" + std::to_string(height));
         require(count == size_t(width) * height * channels,
@@ -321,9 +321,9 @@ NDFB_API ndfb_status ndfb_normal_map_repairs(ndfb_normal_map map, ndfb_repairs* 
 
 NDFB_API ndfb_status ndfb_fit(ndfb_context ctx, ndfb_normal_map map, const ndfb_fit_options* options, ndfb_pyramid* out)
 {
+    if (out) *out = nullptr;  // before any check: NULL after every failure (ndfbake.h)
     return guarded(ctx, [&] {
         require(ctx && map && out, "ndfb_fit: ctx, map and out must not be null");
-        *out = nullptr;
         const PyramidSettings settings = to_pyramid(options);
         const StageProgress progress = to_progress(options);
         const NormalMap& m = map->decoded.map;
@@ -469,9 +469,9 @@ NDFB_API ndfb_status ndfb_bake(ndfb_context ctx, const char* input_path, const c
 NDFB_API ndfb_status ndfb_synthesize(ndfb_context ctx, const char* pattern, uint32_t width, uint32_t height,
                                      uint32_t seed, ndfb_normal_map* out)
 {
+    if (out) *out = nullptr;  // before any check: NULL after every failure (ndfbake.h)
     return guarded(ctx, [&] {
         require(ctx && pattern && out, "ndfb_synthesize: ctx, pattern and out must not be null");
-        *out = nullptr;
         const auto which = pattern_from_name(pattern);
         require(which.has_value(), std::string("unknown pattern '") + pattern +
                                        "': expected vgroove, bumps, fbm, brushed, scratches or weave");
