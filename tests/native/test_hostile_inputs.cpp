@@ -570,6 +570,15 @@ TEST_F(HostileInputs, PathsWithSpacesAndNonAsciiCharactersWork)
     EXPECT_EQ(ndfb_normal_map_save(ctx_, map, (folder + "/tissé 織物.tga").c_str()), NDFB_OK) << error();
     EXPECT_TRUE(fs::exists(folder + "/tissé 織物.tga"));
     ndfb_normal_map_destroy(map);
+
+    // A name that is not UTF-8 (Latin-1 "é"): the bake works and report.json stays UTF-8, the
+    // byte replaced by U+FFFD.
+    const std::string latin1 = path("carte \xe9.png");
+    write_normal_map(latin1, synthesize(Pattern::bumps, 8, 8));
+    ASSERT_EQ(ndfb_bake(ctx_, latin1.c_str(), path("latin1").c_str(), &decode_, &fit_, &write_), NDFB_OK) << error();
+    const std::string report = read_bytes(path("latin1") + "/report.json");
+    EXPECT_NE(report.find("carte \\ufffd.png"), std::string::npos);
+    EXPECT_EQ(report.find('\xe9'), std::string::npos);
 }
 
 // ---- output folders --------------------------------------------------------------------------

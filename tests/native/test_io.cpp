@@ -19,6 +19,7 @@
 
 #include "error.h"
 #include "io/atomic_file.h"
+#include "io/json_writer.h"
 #include "io/lobe_exr.h"
 #include "io/normal_decode.h"
 #include "test_support.h"
@@ -855,6 +856,42 @@ TEST_F(IoTest, ReadOnlyFolderIsNotWritable)
         write_rgba_exr((locked / "lobe.exr").string(), 2, 2, rgba.data(), PixelPrecision::half, {});
     }, Status::io_error, {(locked / "lobe.exr").string()});
     EXPECT_TRUE(files_in(locked).empty());
+}
+
+// ---- report.json -----------------------------------------------------------------------------
+
+// The string value `s` as JsonWriter writes it, without the quotes.
+std::string json_string(const std::string& s)
+{
+    JsonWriter json;
+    json.begin_array().value(nullptr, s).end_array();
+    const std::string& text = json.str();
+    const size_t open = text.find('"'), close = text.rfind('"');
+    return text.substr(open + 1, close - open - 1);
+}
+
+TEST(JsonWriter, WellFormedUtf8PassesThroughUnchanged)
+{
+    for (const std::string s : {"normal map é ü.png", "Ñandú 法线", "😀 \xf4\x8f\xbf\xbf", "\xe0\xa0\x80 \xef\xbf\xbd"})
+        EXPECT_EQ(json_string(s), s);
+    EXPECT_EQ(json_string("a\"b\\c\nd\te"), "a\\\"b\\\\c\\nd\\u0009e");  // escapes as before
+    EXPECT_EQ(json_string(std::string("x\0y", 3)), "x\\u0000y");
+}
+
+// A file name is bytes: one that is not UTF-8 (Latin-1 here) must not make report.json invalid
+// JSON. Each byte outside a well-formed sequence becomes \ufffd; the valid bytes around it stay.
+TEST(JsonWriter, BytesThatAreNotUtf8BecomeReplacementCharacters)
+{
+    const std::string r = "\\ufffd";
+    EXPECT_EQ(json_string("caf\xe9.png"), "caf" + r + ".png");           // Latin-1 é
+    EXPECT_EQ(json_string("\xff\xfe"), r + r);                         // never in UTF-8
+    EXPECT_EQ(json_string("\x80 \xbf"), r + " " + r);                  // lone continuation bytes
+    EXPECT_EQ(json_string("\xc3"), r);                                 // truncated at the end
+    EXPECT_EQ(json_string("\xe6\xb3 x"), r + r + " x");                // truncated inside
+    EXPECT_EQ(json_string("\xc0\xaf \xe0\x80\xaf"), r + r + " " + r + r + r);  // overlong '/'
+    EXPECT_EQ(json_string("\xed\xa0\x80"), r + r + r);                 // a UTF-16 surrogate
+    EXPECT_EQ(json_string("\xf4\x90\x80\x80"), r + r + r + r);         // past U+10FFFF
+    EXPECT_EQ(json_string("\xc3\xa9\xe9\xc3\xa9"), "\xc3\xa9" + r + "\xc3\xa9");
 }
 
 }  // namespace

@@ -1,4 +1,5 @@
 // A minimal streaming JSON writer for reports: objects, arrays, strings, numbers, booleans, null.
+// Strings are written as valid UTF-8 whatever the bytes given (file names are bytes on Linux).
 #pragma once
 
 #include <cmath>
@@ -57,16 +58,51 @@ private:
         out_ += bracket;
         if (first_.empty()) out_ += '\n';
     }
+    // JSON text must be UTF-8 (RFC 8259 §8.1), so strict readers (Python's json, jq) refuse a
+    // report holding, say, a Latin-1 file name. Well-formed UTF-8 is copied as it is; every byte
+    // that does not belong to a well-formed sequence becomes U+FFFD, written as the escape
+    // \ufffd, as decoders replace bad bytes.
     void quote(const std::string& s)
     {
         out_ += '"';
-        for (unsigned char c : s) {
+        for (size_t i = 0; i < s.size();) {
+            const unsigned char c = static_cast<unsigned char>(s[i]);
+            if (c >= 0x80) {
+                const size_t n = utf8_sequence_length(s, i);
+                if (n == 0) { out_ += "\\ufffd"; ++i; }
+                else { out_.append(s, i, n); i += n; }
+                continue;
+            }
             if (c == '"' || c == '\\') { out_ += '\\'; out_ += char(c); }
             else if (c == '\n') out_ += "\\n";
             else if (c < 0x20) { char b[8]; std::snprintf(b, sizeof b, "\\u%04x", c); out_ += b; }
             else out_ += char(c);
+            ++i;
         }
         out_ += '"';
+    }
+
+    // The length of the well-formed UTF-8 sequence that starts at s[i] (Unicode's table 3-7: no
+    // overlong forms, no surrogates, nothing above U+10FFFF), or 0 where none does.
+    static size_t utf8_sequence_length(const std::string& s, size_t i)
+    {
+        const auto byte = [&](size_t k) { return k < s.size() ? static_cast<unsigned char>(s[k]) : 0u; };
+        const unsigned lead = byte(i);
+        size_t n = 0;
+        unsigned low = 0x80, high = 0xbf;  // what the second byte may be; later ones are 80..bf
+        if (lead < 0x80) return 1;
+        else if (lead >= 0xc2 && lead <= 0xdf) n = 2;
+        else if (lead == 0xe0) n = 3, low = 0xa0;        // below: overlong
+        else if (lead == 0xed) n = 3, high = 0x9f;       // above: UTF-16 surrogates
+        else if (lead >= 0xe1 && lead <= 0xef) n = 3;
+        else if (lead == 0xf0) n = 4, low = 0x90;        // below: overlong
+        else if (lead >= 0xf1 && lead <= 0xf3) n = 4;
+        else if (lead == 0xf4) n = 4, high = 0x8f;       // above: past U+10FFFF
+        else return 0;                                   // 80..c1, f5..ff: never a lead byte
+        if (byte(i + 1) < low || byte(i + 1) > high) return 0;
+        for (size_t k = 2; k < n; ++k)
+            if (byte(i + k) < 0x80 || byte(i + k) > 0xbf) return 0;
+        return n;
     }
 
     std::string out_;
