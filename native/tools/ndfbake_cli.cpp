@@ -1,11 +1,13 @@
 // The `ndfbake` command line: a client of the public C API, like the Blender add-on.
 #include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -281,12 +283,42 @@ int run_synth(ndfb_context ctx, const Args& args)
     if (height < 0) height = width;
     if (!(width >= 1 && height >= 1 && width <= 16384 && height <= 16384))
         return fail(1, "--size and --height must be 1..16384");
+
+    // Ctrl-C as in bake: exit 130 and no file left, an earlier --out kept as it was. Neither call
+    // takes a progress callback, so an interrupt is noted by the handler and acted on between
+    // them: the map is saved under a hidden name beside --out (atomically, by the library) and
+    // renamed to --out only if no interrupt came meanwhile.
+    std::signal(SIGINT, on_interrupt);
+    std::signal(SIGTERM, on_interrupt);
     ndfb_normal_map map = nullptr;
     ndfb_status status = ndfb_synthesize(ctx, args.positional[0].c_str(), uint32_t(width), uint32_t(height),
                                          uint32_t(seed), &map);
-    if (status == NDFB_OK) status = ndfb_normal_map_save(ctx, map, out.c_str());
-    ndfb_normal_map_destroy(map);
     if (status != NDFB_OK) return fail_status(ctx, status);
+    if (g_interrupted) {
+        ndfb_normal_map_destroy(map);
+        return fail_status(ctx, NDFB_ERROR_CANCELLED);
+    }
+    const std::filesystem::path target(out);
+    const std::string staging =
+        (target.parent_path() / ("." + target.stem().string() + ".synth-" + std::to_string(::getpid()) +
+                                 target.extension().string())).string();
+    status = ndfb_normal_map_save(ctx, map, staging.c_str());
+    ndfb_normal_map_destroy(map);
+    if (status != NDFB_OK) {
+        // The library names the file it was asked to write: name the user's instead.
+        std::string message = ndfb_last_error(ctx);
+        for (size_t at; (at = message.find(staging)) != std::string::npos;) message.replace(at, staging.size(), out);
+        return fail(exit_code_for(status), std::string(ndfb_status_name(status)) + ": " + message);
+    }
+    if (g_interrupted) {
+        std::remove(staging.c_str());
+        return fail_status(ctx, NDFB_ERROR_CANCELLED);
+    }
+    if (std::rename(staging.c_str(), out.c_str()) != 0) {
+        const std::string reason = std::strerror(errno);
+        std::remove(staging.c_str());
+        return fail(3, "i/o error: cannot write '" + out + "': " + reason);
+    }
     return 0;
 }
 

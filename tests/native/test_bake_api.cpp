@@ -568,5 +568,41 @@ TEST_F(BakeApi, InterruptingALargeBakeLeavesNoFiles)
     EXPECT_TRUE(listing(out).empty());
 }
 
+// The same for synth, interrupted while it writes the image (its temporary file is there): exit
+// 130, no temporary left, and the file an earlier run wrote under that name kept as it was.
+TEST_F(BakeApi, InterruptingSynthLeavesNoFilesAndKeepsTheEarlierOne)
+{
+    const std::string folder = path("maps"), out = folder + "/fbm.png";
+    std::filesystem::create_directories(folder);
+    ASSERT_EQ(run_cli("synth fbm --size 8 --out " + out, path("small.err")).exit_code, 0);
+    const auto read_all = [](const std::string& file) {
+        std::ifstream in(file, std::ios::binary);
+        return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    };
+    const std::string earlier = read_all(out);
+    const std::string err = path("synth.err");
+    const pid_t child = fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+        freopen(err.c_str(), "w", stderr);
+        execl(NDFBAKE_CLI_PATH, NDFBAKE_CLI_PATH, "synth", "fbm", "--size", "2048", "--out", out.c_str(), nullptr);
+        _exit(127);
+    }
+    // Wait until the image is being written (a second file in the folder), then Ctrl-C.
+    bool writing = false;
+    for (int i = 0; i < 60000 && !writing; ++i) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        writing = listing(folder).size() > 1;
+    }
+    EXPECT_TRUE(writing) << "no temporary file appeared";
+    kill(child, SIGINT);
+    int status = 0;
+    waitpid(child, &status, 0);
+    EXPECT_TRUE(WIFEXITED(status)) << "ended by signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+    EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 130) << read_all(err);
+    EXPECT_EQ(listing(folder), std::set<std::string>{out});  // no temporary left
+    EXPECT_TRUE(read_all(out) == earlier) << "the earlier file changed";
+}
+
 }  // namespace
 }  // namespace ndfbake
