@@ -11,6 +11,7 @@
 #include <limits>
 #include <set>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "ndfbake.h"
@@ -84,6 +85,17 @@ TEST_F(TangentApi, BadMeshesAreRefusedWithMessagesNamingTheElement)
         v.struct_size = size;
         EXPECT_EQ(ndfb_tangents(ctx_, &v, 0, out.data(), out.size(), nullptr, 0), NDFB_ERROR_INVALID_ARGUMENT) << size;
         EXPECT_NE(error().find("ndfb_mesh_init"), std::string::npos) << error();
+    }
+
+    // A domain that is no enumerator, stored as a C caller would (an int): refused, and read as
+    // an int (exports' raw()), since a load through the enum type is undefined (UBSan: enum).
+    for (auto [field, value, says] : {std::tuple{&ndfb_mesh::normal_domain, 7, "unknown normal domain 7"},
+                                      std::tuple{&ndfb_mesh::uv_domain, -1, "unknown uv domain -1"}}) {
+        v = view(m);
+        std::memcpy(&(v.*field), &value, sizeof value);
+        out.assign(16, 0.0f);
+        EXPECT_EQ(ndfb_tangents(ctx_, &v, 0, out.data(), out.size(), nullptr, 0), NDFB_ERROR_INVALID_ARGUMENT);
+        EXPECT_NE(error().find(says), std::string::npos) << error();
     }
 
     v = view(m);

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstring>
 #include <exception>
 #include <mutex>
 #include <new>
@@ -53,6 +54,18 @@ private:
 
 inline constexpr const char* kDeadContextMessage =
     "the context was destroyed or was never created by ndfb_context_create";
+
+// An enum argument or field as the int a C (or ctypes) caller stored in it. A value outside the
+// enumerators cannot be read through the C++ enum type (undefined behaviour, which UBSan reports
+// and the optimizer may exploit in a switch), so the bytes are read as int and checked as such.
+template <typename Enum>
+int raw(const Enum& value)
+{
+    static_assert(sizeof(Enum) == sizeof(int));
+    int v;
+    std::memcpy(&v, &value, sizeof v);
+    return v;
+}
 
 // Option structs only ever grow at their end, and `first_size` is the size of the struct as ABI 1
 // first shipped it: those fields every caller has, so they are read without looking at

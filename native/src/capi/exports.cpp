@@ -40,18 +40,6 @@ void require(bool condition, const std::string& message)
     if (!condition) throw Error(Status::invalid_argument, message);
 }
 
-// An enum argument or field as the int a C (or ctypes) caller stored in it. A value outside the
-// enumerators cannot be read through the C++ enum type (undefined behaviour, which UBSan reports
-// and the optimizer may exploit in a switch), so the bytes are read as int and checked as such.
-template <typename Enum>
-int raw(const Enum& value)
-{
-    static_assert(sizeof(Enum) == sizeof(int));
-    int v;
-    std::memcpy(&v, &value, sizeof v);
-    return v;
-}
-
 // What each option struct held when ABI 1 first shipped (require_struct_size): ndfb_decode_options
 // has never grown; ndfb_fit_options ended at progress_user (max_memory_bytes, max_levels, starts
 // and refine came later), ndfb_write_options at source_name (atlas came later).

@@ -25,9 +25,11 @@ void require(bool condition, const std::string& message)
     if (!condition) throw Error(Status::invalid_argument, message);
 }
 
-AttributeDomain to_domain(ndfb_domain d, const char* what)
+// `d`: the field as raw() reads it, since the caller's value may be no enumerator.
+AttributeDomain to_domain(int d, const char* what)
 {
-    require(d == NDFB_PER_CORNER || d == NDFB_PER_VERTEX, std::string("mesh: unknown ") + what + " domain");
+    require(d == NDFB_PER_CORNER || d == NDFB_PER_VERTEX,
+            std::string("mesh: unknown ") + what + " domain " + std::to_string(d));
     return d == NDFB_PER_CORNER ? AttributeDomain::corner : AttributeDomain::vertex;
 }
 
@@ -49,8 +51,8 @@ MeshInput mesh_input(const ndfb_mesh* m, NgonPolicy ngons)
     a.positions = {m->positions, m->vertex_count * 3};
     a.face_sizes = {m->face_sizes, m->face_count};
     a.corner_vertices = {m->corner_vertices, m->corner_count};
-    a.normal_domain = to_domain(m->normal_domain, "normal");
-    a.uv_domain = to_domain(m->uv_domain, "uv");
+    a.normal_domain = to_domain(raw(m->normal_domain), "normal");
+    a.uv_domain = to_domain(raw(m->uv_domain), "uv");
     a.normals = {m->normals, (a.normal_domain == AttributeDomain::corner ? m->corner_count : m->vertex_count) * 3};
     a.uvs = {m->uvs, (a.uv_domain == AttributeDomain::corner ? m->corner_count : m->vertex_count) * 2};
     return MeshInput::validate(a, ngons);
