@@ -18,7 +18,10 @@ Choices the design leaves open, made here:
   and UDIM images are refused with a message saying what to do, and nothing changes. So is an
   image with unsaved edits (painted in Blender): the library would read the file, not what the
   user sees.
-- A muted Normal Map or Image Texture node is no normal map: the material renders without it.
+- A muted Normal Map or Image Texture node is no normal map: the material renders without it. So
+  is a muted link on the way (Normal Map -> Principled Normal, Image Texture -> Normal Map Color):
+  a muted link is no link anywhere in the scan (upstream, reachable_principled), as in Blender's
+  renders.
 - A material linked from a library is refused (LINKED_MATERIAL): the bake changes the material
   and writes beside the .blend, and neither would outlive a reload; bake it in its own file. So is
   one whose Principled BSDF is animated by a linked action (LINKED_ANIMATION): the group node's
@@ -83,11 +86,39 @@ class ScanResult:
         return self.problems[0] if self.problems else None
 
 
-def upstream(socket):
-    """The node and output socket feeding `socket`, through reroutes; (None, None) if unlinked."""
+def live_link(socket):
+    """The link that feeds `socket`, or None: unlinked, or its link muted (Blender then renders the
+    socket's own value, as if there were no link)."""
+    for link in socket.links:
+        if not link.is_muted:
+            return link
+    return None
+
+
+def muted_link(socket):
+    """The muted link on the way to `socket` through reroutes, or None: what cuts a chain that
+    upstream() does not follow."""
     seen = set()
-    while socket is not None and socket.is_linked:
+    while socket is not None and socket.links:  # not is_linked: Blender's updates clear it for a muted link
         link = socket.links[0]
+        if link.is_muted:
+            return link
+        node = link.from_node
+        if node.bl_idname != "NodeReroute" or node.name in seen:
+            return None
+        seen.add(node.name)
+        socket = node.inputs[0]
+    return None
+
+
+def upstream(socket):
+    """The node and output socket feeding `socket`, through reroutes; (None, None) if unlinked or
+    cut by a muted link (a muted link is no link: Blender renders as if it were not there)."""
+    seen = set()
+    while socket is not None:
+        link = live_link(socket)
+        if link is None:
+            break
         node = link.from_node
         if node.bl_idname == "NodeReroute" and node.name not in seen:
             seen.add(node.name)
@@ -109,6 +140,8 @@ def reachable_principled(tree):
     while stack:
         socket = stack.pop()
         for link in socket.links:
+            if link.is_muted:  # renders as no link
+                continue
             node = link.from_node
             if node.name in seen:
                 continue
@@ -253,10 +286,16 @@ def scan(material):
     normal_maps, muted = [], []
     for p in principled:
         node, _ = upstream(p.inputs["Normal"])
+        cut = muted_link(p.inputs["Normal"])
+        if node is None and cut is not None and cut.from_node.bl_idname == "ShaderNodeNormalMap":
+            muted.append("the link from '%s' to '%s'" % (cut.from_node.name, p.name))
         if node is not None and node.bl_idname == "ShaderNodeNormalMap":
             texture, _ = upstream(node.inputs["Color"])
+            cut = muted_link(node.inputs["Color"])
             if node.mute or (texture is not None and texture.mute):
                 muted.append(node.name if node.mute else texture.name)
+            elif texture is None and cut is not None:
+                muted.append("the link from '%s' to '%s'" % (cut.from_node.name, node.name))
             else:
                 normal_maps.append((p, node))
     if not normal_maps:
@@ -298,8 +337,8 @@ def scan(material):
     # Baked, the group node holds the Principled's inputs as the user edits them now.
     first = groups.get(first.name, first)
     rough = first.inputs["Roughness"]
-    result.roughness_linked = rough.is_linked
-    result.roughness = DEFAULT_LINKED_ROUGHNESS if rough.is_linked else float(rough.default_value)
+    result.roughness_linked = live_link(rough) is not None
+    result.roughness = DEFAULT_LINKED_ROUGHNESS if result.roughness_linked else float(rough.default_value)
     return result
 
 

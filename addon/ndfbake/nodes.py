@@ -504,10 +504,10 @@ def _sample_level0(tree, gin, image, image_texture, has_vector, j, y):
 
 def build_material_group(name, principled, normal_map, image_texture, lobe_images, atlas=None, lod=None):
     """A group with the carried Principled inputs (+ Normal Strength, + Vector if the original
-    texture's was linked, + the level-of-detail constants with an atlas) and one BSDF output,
-    shading through len(lobe_images) lobes: level-0 textures that the renderer filters itself
-    (atlas None), or MIP atlases (AtlasLayout) sampled at the level of detail the scene gives
-    (lod: a scene_lod.LodPlan, required with an atlas)."""
+    texture's has a live (unmuted) link, + the level-of-detail constants with an atlas) and one
+    BSDF output, shading through len(lobe_images) lobes: level-0 textures that the renderer
+    filters itself (atlas None), or MIP atlases (AtlasLayout) sampled at the level of detail the
+    scene gives (lod: a scene_lod.LodPlan, required with an atlas)."""
     tree = _new_group(name)
     decode = lobe_group()
     carried = carried_inputs(principled)
@@ -520,7 +520,8 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     strength = _add_socket(tree, "INPUT", "NodeSocketFloat", "Normal Strength")
     strength.default_value = 1.0
     strength.min_value = 0.0
-    has_vector = image_texture.inputs["Vector"].is_linked
+    # A muted link is no link: the texture then reads its default UVs, and so must the group.
+    has_vector = material_scan.live_link(image_texture.inputs["Vector"]) is not None
     if has_vector:
         vector = _add_socket(tree, "INPUT", "NodeSocketVector", "Vector")
         vector.hide_value = True
@@ -766,8 +767,8 @@ def _wire_group_node(material_tree, node, group_tree, principled, normal_map, im
     for socket in carried_inputs(principled):
         _copy_input(links, socket, node.inputs[socket.name])
     _copy_input(links, normal_map.inputs["Strength"], node.inputs["Normal Strength"])
-    if "Vector" in node.inputs:
-        links.new(image_texture.inputs["Vector"].links[0].from_socket, node.inputs["Vector"])
+    if "Vector" in node.inputs:  # made only where the texture's Vector has a live link
+        links.new(material_scan.live_link(image_texture.inputs["Vector"]).from_socket, node.inputs["Vector"])
 
     for link in list(principled.outputs["BSDF"].links):
         bypassed.append((link.to_node.name, link.to_socket.identifier, bool(link.is_muted)))

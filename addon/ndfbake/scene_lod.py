@@ -269,16 +269,19 @@ def texture_uv(texture):
     for rendering: Vector unlinked or Texture Coordinate's UV; a UV Map node's name) and how many
     times its image repeats per unit of that map: the geometric mean of the x and y scale of each
     Mapping node on the way (divided for a Texture-type mapping, which moves the texture instead of
-    the coordinates; muted ones pass the vector through). None where the nodes do not say (other
-    coordinates, a linked scale or rotation, a rotation out of the UV plane, math)."""
-    node, output = material_scan.upstream(texture.inputs["Vector"])
+    the coordinates; muted ones pass the vector through; a muted link is no link, as in renders).
+    None where the nodes do not say (other coordinates, a linked scale or rotation, a rotation out
+    of the UV plane, math)."""
+    node, output = material_scan.upstream(texture.inputs["Vector"])  # muted link: the texture's own UV
     repeat = 1.0
     while node is not None and node.bl_idname == "ShaderNodeMapping":
         factor = _mapping_repeat(node)
-        if factor is None or not node.inputs["Vector"].is_linked:
+        if factor is None:
             return None
         repeat *= factor
         node, output = material_scan.upstream(node.inputs["Vector"])
+        if node is None:  # unlinked or muted: the Mapping maps its Vector value, not UVs
+            return None
     if node is None or (node.bl_idname == "ShaderNodeTexCoord" and output.name == "UV"):
         return repeat, ""
     if node.bl_idname == "ShaderNodeUVMap":

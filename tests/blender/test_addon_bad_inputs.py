@@ -10,8 +10,9 @@ as root, permission bits do not bind, so the bake runs under an unprivileged eff
 where the lobe folder would go (left alone: the bake takes the next folder name); an unsaved .blend; a corrupt image file; a Normal Map fed by
 something other than an Image Texture; two different normal-map images in one material; a
 material linked from a library .blend (Bake and Revert refuse it); an image with unsaved edits; a
-muted Normal Map node; a mesh whose UVs are not finite (the level of detail cannot be measured;
-the refused bakes keep no folder name). Not refused: one file through two Image datablocks.
+muted Normal Map node; a muted link into the Principled's Normal or the Normal Map's Color; a
+mesh whose UVs are not finite (the level of detail cannot be measured; the refused bakes keep no
+folder name). Not refused: one file through two Image datablocks.
 """
 import contextlib
 import os
@@ -255,6 +256,23 @@ def test_muted_normal_map():
     _case(run)
 
 
+def test_muted_normal_map_link():
+    """A muted link is no link (Blender renders the socket's own value): with the Normal Map ->
+    Principled Normal link or the Image Texture -> Normal Map Color link muted, the material
+    renders flat, and the bake says that its normal map is muted, naming the link."""
+    for to_node, to_socket, from_node in (("Principled BSDF", "Normal", "Normal Map"),
+                                          ("Normal Map", "Color", "Normal Texture")):
+        def run(directory):
+            from ndfbake import bake
+            material = h.baked_scene(directory)
+            material.node_tree.nodes[to_node].inputs[to_socket].links[0].is_muted = True
+            bpy.ops.wm.save_mainfile()
+            expect_refused(material, "NO_NORMAL_MAP", ["'Bumpy'", "muted", "the link from '%s' to '%s'"
+                                                       % (from_node, to_node)], directory)
+            h.expect(not bake.materials_needing_bake(bpy.context.scene), "Bake All would bake a muted link")
+        _case(run)
+
+
 def test_non_finite_uvs():
     def run(directory):
         material = h.baked_scene(directory)
@@ -273,7 +291,8 @@ def test_non_finite_uvs():
 
 if __name__ == "__main__":
     h.import_addon()
-    h.run([test_linked_material, test_image_with_unsaved_edits, test_muted_normal_map, test_non_finite_uvs,
+    h.run([test_linked_material, test_image_with_unsaved_edits, test_muted_normal_map, test_muted_normal_map_link,
+           test_non_finite_uvs,
            test_material_without_normal_map, test_missing_image_file, test_packed_image, test_generated_image,
            test_srgb_tagged_normal_map, test_object_space_normal_map, test_read_only_output_folder,
            test_file_in_place_of_the_output_folder, test_unsaved_blend, test_corrupt_image_file,

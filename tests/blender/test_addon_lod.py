@@ -14,8 +14,10 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 - A bake with a camera writes only the levels the camera reaches, and one atlas per lobe; the
   group's pixel angle follows the lens and the resolution through drivers; revert removes them.
 - A Mapping node that tiles the texture 4x (Point) or 2x (Texture type, scale 0.5) multiplies the
-  texel density by 4 (2), a muted one by 1, a UV Map node reading a UV map tiled 4x gives 4x;
-  coordinates from elsewhere (Object) or rotated out of the UV plane leave level 0 to the renderer.
+  texel density by 4 (2), a muted one by 1, and so does a muted link from it into the texture (the
+  group then gets no Vector input); a UV Map node reading a UV map tiled 4x gives 4x; coordinates
+  from elsewhere (Object), a muted link into the Mapping, or a rotation out of the UV plane leave
+  level 0 to the renderer.
 """
 import math
 import os
@@ -319,6 +321,27 @@ def test_a_mapping_node_scales_the_texel_density():
         density = tree.nodes["ndfbake"].inputs["Texels per Unit"].default_value
         h.expect(abs(density - 64.0) < 0.05, "a muted Mapping node: %.3f texels per unit, expected 64" % density)
         mapping.mute = False
+        # A muted link is no link. Into the texture: it reads its UVs untiled, and so does the group
+        # (no Vector input: its lookups read the UVs too). Into the Mapping: it maps no UVs. A first
+        # bake (reverted before): a re-bake's removal of the old nodes has Blender update the tree,
+        # which clears is_linked of a socket whose link is muted, and the old code read is_linked.
+        bake.revert(material)
+        texture_vector = tree.nodes["Normal Texture"].inputs["Vector"]
+        texture_vector.links[0].is_muted = True
+        h.expect(texture_vector.is_linked, "Blender no longer says a muted link is linked: the test checks nothing")
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        group = tree.nodes["ndfbake"]
+        density = group.inputs["Texels per Unit"].default_value
+        h.expect(abs(density - 64.0) < 0.05, "a muted link into the texture: %.3f texels per unit, expected 64"
+                 % density)
+        h.expect("Vector" not in group.inputs, "the group has a Vector input (linked: %s) where the texture's "
+                 "link is muted" % ("Vector" in group.inputs and group.inputs["Vector"].is_linked))
+        texture_vector.links[0].is_muted = False
+        mapping.inputs["Vector"].links[0].is_muted = True
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        h.expect("level 0 filtered by the renderer (its texture coordinates do not come from one UV map" in result.summary,
+                 "a muted link into the Mapping: " + result.summary)
+        mapping.inputs["Vector"].links[0].is_muted = False
         mapping.inputs["Rotation"].default_value = (math.pi / 2, 0.0, 0.0)  # out of the UV plane
         result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
         h.expect("level 0 filtered by the renderer (its texture coordinates do not come from one UV map" in result.summary,
