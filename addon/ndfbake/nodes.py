@@ -391,13 +391,14 @@ def atlas_table_group(name, atlas):
 
 def carried_inputs(principled):
     """Principled inputs passed through the group: every enabled input except Normal; the
-    implicit-default vectors (Clearcoat Normal, Tangent) only when linked, since a group input
-    cannot reproduce their "use the geometry" default."""
+    implicit-default vectors (Clearcoat Normal, Tangent) only when linked (not muted: a muted link
+    renders as that default), since a group input cannot reproduce their "use the geometry"
+    default."""
     carried = []
     for socket in principled.inputs:
         if not socket.enabled or socket.name == "Normal":
             continue
-        if socket.hide_value and not socket.is_linked:
+        if socket.hide_value and material_scan.live_link(socket) is None:
             continue
         carried.append(socket)
     return carried
@@ -675,12 +676,17 @@ def carry_animation(material_tree, principled, node):
 
 def _copy_input(links, source, target):
     """Makes input socket `target` take what `source` takes: the same link (muted or not), or, with
-    none, its value. Touches nothing that already matches."""
-    if source.is_linked:
+    none, its value; under a muted link, its value too (what renders). Touches nothing that already
+    matches. Links, not is_linked: Blender's tree updates clear is_linked where the link is muted."""
+    if source.links:
         link = source.links[0]
-        if not (target.is_linked and target.links[0].from_socket == link.from_socket
-                and target.links[0].is_muted == link.is_muted):
+        current = target.links[0] if target.links else None
+        if not (current is not None and current.from_socket == link.from_socket
+                and current.is_muted == link.is_muted):
             links.new(link.from_socket, target).is_muted = link.is_muted
+        if not link.is_muted or _value(target) == _value(source):
+            return
+        target.default_value = source.default_value
         return
     for link in list(target.links):
         links.remove(link)

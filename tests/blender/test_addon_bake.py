@@ -13,10 +13,10 @@ saved as a .blend in a temporary folder.
   (test_addon_folders.py).
 - The operators work in the background; re-baking with fewer lobes emits a one-lobe group and
   drops the surplus textures; bake + save + reopen keeps working and reverts; bake_all bakes only
-  what the scene renders; linked Principled inputs are carried over; packing works; keyframes and
-  drivers on the Principled's inputs (with their modifiers) move to the group node's and go again
-  on Revert; edits on the group node survive a re-bake and Revert; two materials sharing an action
-  bake and revert independently.
+  what the scene renders; linked Principled inputs are carried over (muted links muted, and kept on
+  Revert); packing works; keyframes and drivers on the Principled's inputs (with their modifiers)
+  move to the group node's and go again on Revert; edits on the group node survive a re-bake and
+  Revert; two materials sharing an action bake and revert independently.
 """
 import os
 import re
@@ -229,7 +229,7 @@ def test_bake_all_bakes_what_the_scene_renders():
 
 
 def test_linked_inputs_are_carried_and_restored():
-    from ndfbake import bake
+    from ndfbake import bake, nodes
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, metallic=1.0)
         tree = material.node_tree
@@ -247,11 +247,27 @@ def test_linked_inputs_are_carried_and_restored():
         tree.links.new(coords.outputs["UV"], mapping.inputs["Vector"])
         tree.links.new(mapping.outputs["Vector"], tree.nodes["Normal Texture"].inputs["Vector"])
         principled.inputs["Specular"].default_value = 0.7
+        # A muted link renders as the input's value, and stays muted on the group node and after Revert.
+        glow = tree.nodes.new("ShaderNodeValue")
+        glow.outputs[0].default_value = 5.0
+        principled.inputs["Emission Strength"].default_value = 0.25
+        tree.links.new(glow.outputs[0], principled.inputs["Emission Strength"]).is_muted = True
+        # Muted, a Clearcoat Normal link renders as the geometry's normal, which a group input
+        # cannot give: not carried (Blender still says is_linked here, before a tree update).
+        clearcoat = principled.inputs["Clearcoat Normal"]
+        tree.links.new(tree.nodes["Normal Map"].outputs["Normal"], clearcoat).is_muted = True
+        h.expect("Clearcoat Normal" not in [s.name for s in nodes.carried_inputs(principled)],
+                 "a muted Clearcoat Normal link is carried (is_linked: %s)" % clearcoat.is_linked)
         bpy.ops.wm.save_mainfile()
         before = h.dump_material(material)
 
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
         group_node = _group_nodes(material)[0]
+        emission = group_node.inputs["Emission Strength"]
+        h.expect([(l.from_node, l.is_muted) for l in emission.links] == [(glow, True)],
+                 "the muted Emission Strength link is not carried muted: %s" % [(l.from_node.name, l.is_muted)
+                                                                             for l in emission.links])
+        h.expect(abs(emission.default_value - 0.25) < 1e-6, "Emission Strength value under the muted link")
         h.expect(group_node.inputs["Base Color"].links[0].from_node == rgb, "Base Color not carried")
         h.expect(group_node.inputs["Roughness"].links[0].from_node == value, "Roughness not carried")
         h.expect(group_node.inputs["Vector"].links[0].from_node == mapping, "texture coordinates not carried")
@@ -263,7 +279,8 @@ def test_linked_inputs_are_carried_and_restored():
         rec = material_record(material)
         h.expect(abs(rec["settings"]["roughness"] - 0.5) < 1e-6, "linked roughness: the fit uses 0.5")
         bake.revert(material)
-        h.expect(h.dump_material(material) == before, "material differs after revert")
+        h.expect(h.dump_material(material) == before, "material differs after revert: %s"
+                 % h.differences(before, h.dump_material(material)))
 
 
 def test_a_user_graph_downstream_gets_no_eevee_output():
