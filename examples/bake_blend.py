@@ -11,7 +11,9 @@ lobe textures go to //<material>.ndfbake/ beside the .blend. One line per materi
 then a summary; the .blend is saved afterwards (its node groups refer to the textures by relative
 path), and the lobe folders this run wrote that the saved file does not use are deleted. With
 --no-save nothing is saved and this run's lobe folders go when Blender exits (a dry run).
---revert undoes earlier bakes instead (nodes restored). Folders of earlier runs stay, since other
+--revert undoes earlier bakes instead (nodes restored): without --material, those of the
+materials of this file; baked materials linked from a library are left alone (the summary line
+counts them: revert them in their own file). Folders of earlier runs stay, since other
 .blend files may use them: --delete-unused also deletes, after the save, the lobe folders beside
 the .blend that it does not use (as the panel's Delete Unused Lobe Folders).
 
@@ -115,11 +117,19 @@ def main():
             return 2
         materials = [bpy.data.materials[name] for name in args.material]
     elif args.revert:
-        materials = [m for m in bpy.data.materials if bake.is_baked(m)]
+        materials = [m for m in bpy.data.materials if bake.is_baked(m) and m.library is None]
     else:
         materials = bake.materials_needing_bake(bpy.context.scene)
+    # A baked material linked from a library is reverted in its own file (bake.revert refuses it),
+    # as the bake leaves it to its own file: not a failure of this one.
+    linked = sorted(m.name for m in bpy.data.materials if m.library is not None and bake.is_baked(m)) \
+        if args.revert and not args.material else []
+    linked_note = ("; left %d baked material%s linked from a library alone (revert %s in %s own file): %s"
+                   % (len(linked), "" if len(linked) == 1 else "s", "it" if len(linked) == 1 else "them",
+                      "its" if len(linked) == 1 else "their", ", ".join(linked))) if linked else ""
     if not materials:
-        print("bake_blend: nothing to %s in %s" % ("revert" if args.revert else "bake", bpy.data.filepath))
+        print("bake_blend: nothing to %s in %s%s" % ("revert" if args.revert else "bake", bpy.data.filepath,
+                                                   linked_note))
         return _delete_unused(addon.lobe_folders) if args.delete_unused else 0
 
     settings = bake.BakeSettings(max_lobes=args.max_lobes, tolerance=args.tolerance, refine=args.refine,
@@ -151,9 +161,10 @@ def main():
         addon.lobe_folders.delete_unused_folders()
     if args.delete_unused and _delete_unused(addon.lobe_folders):  # the file on disk is the one in memory
         failures += 1
-    print("%s %d of %d materials in %.1f s%s" % ("reverted" if args.revert else "baked", changed, len(materials),
-                                               time.perf_counter() - start,
-                                               ", saved " + bpy.data.filepath if changed and not args.no_save else ""))
+    print("%s %d of %d materials in %.1f s%s%s" % ("reverted" if args.revert else "baked", changed, len(materials),
+                                                 time.perf_counter() - start,
+                                                 ", saved " + bpy.data.filepath if changed and not args.no_save else "",
+                                                 linked_note))
     return 1 if failures else 0
 
 

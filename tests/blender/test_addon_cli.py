@@ -11,7 +11,9 @@ Space is sRGB), and an unrendered "Hidden" one. The script runs in a separate `b
 - an unknown material and --max-lobes 0 exit 2, changing nothing;
 - a bake whose .blend cannot be saved exits 1 with a FAILED line, and its lobe folder, which no
   saved file uses, goes;
-- --delete-unused deletes the earlier runs' folders the file does not use (not with --no-save).
+- --delete-unused deletes the earlier runs' folders the file does not use (not with --no-save);
+- --revert in a file that links a baked material from a library reverts the file's own baked
+  materials, leaves the linked one alone (the summary says so) and exits 0.
 """
 import json
 import os
@@ -96,6 +98,41 @@ def test_command_line_bake_and_revert():
         h.expect(not [f for f in os.listdir(directory) if ".ndfbake" in f], "left: %s" % os.listdir(directory))
 
 
+def test_revert_leaves_linked_materials_alone():
+    """--revert reverts this file's baked materials; one linked from a library (baked in its own
+    file) is left alone and counted in the summary, and the run succeeds."""
+    from ndfbake import bake
+    with h.scratch_dir() as directory:
+        shared = h.baked_scene(directory, material_name="Shared")
+        local = h.normal_mapped_material("Local", os.path.join(directory, "normal.png"))
+        h.plane_with(local, "P2")
+        bpy.ops.wm.save_mainfile()
+        for material in (shared, local):
+            bake.bake_material(material, bake.BakeSettings(max_lobes=1, level_of_detail="RENDERER"))
+        bpy.ops.wm.save_mainfile()
+        library_mtime = os.path.getmtime(os.path.join(directory, "scene.blend"))
+        shot = os.path.join(directory, "shot.blend")
+        h.shot_with_material_from(directory, "Shared", link=True)
+        with bpy.data.libraries.load(os.path.join(directory, "scene.blend"), link=False) as (source, target):
+            target.materials = ["Local"]
+        h.plane_with(bpy.data.materials["Local"], "P2")
+        bpy.ops.wm.save_mainfile()
+
+        code, out = h.run_bake_blend(shot, "--revert")
+        h.expect(code == 0, "revert with a linked baked material: exit %d\n%s" % (code, out))
+        h.expect("reverted Local" in out and "FAILED" not in out, out)
+        h.expect("reverted 1 of 1 materials" in out and "left 1 baked material linked from a library alone "
+                 "(revert it in its own file): Shared" in out, out)
+        bpy.ops.wm.open_mainfile(filepath=shot)
+        h.expect(not bake.is_baked(bpy.data.materials["Local"]), "Local is still baked")
+        h.expect(bake.is_baked(bpy.data.materials["Shared"]), "the linked material lost its bake")
+        h.expect(os.path.getmtime(os.path.join(directory, "scene.blend")) == library_mtime, "the library changed")
+
+        code, out = h.run_bake_blend(shot, "--revert")  # only the linked one is baked now
+        h.expect(code == 0 and "nothing to revert in %s; left 1 baked material linked" % shot in out,
+                 "nothing local to revert: exit %d\n%s" % (code, out))
+
+
 if __name__ == "__main__":
     h.import_addon()
-    h.run([test_command_line_bake_and_revert])
+    h.run([test_command_line_bake_and_revert, test_revert_leaves_linked_materials_alone])
