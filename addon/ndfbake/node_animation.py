@@ -62,6 +62,17 @@ def tree_actions(material_tree):
     return actions
 
 
+def input_animated(material_tree, node, index):
+    """Whether a keyframe curve (active action or NLA strip) or a driver of the tree or its
+    material sets input `index` of `node`."""
+    paths = set(_input_paths(node, node, [(index, index)]))
+    if any(curve.data_path in paths for action in tree_actions(material_tree) for curve in action.fcurves):
+        return True
+    sets, _ = _driver_sets(material_tree)
+    return any(driver.data_path[len(prefix):] in paths for animation, prefix in sets
+               for driver in animation.drivers if driver.data_path.startswith(prefix))
+
+
 def animates_elsewhere(action, material_tree, node_name):
     """Whether another node tree that the action animates has a node of that name."""
     for user in bpy.data.user_map(subset=[action]).get(action, ()):

@@ -32,11 +32,11 @@ sphere, which is what its error measure compares); the shader leaves it out: eve
 BSDF is normalized about its own normal, and so must the lobe that stands for them be. Measured in
 a white furnace (Cycles, bumps map, roughness 0.15, view from above): 0.885 of the reference with
 the amplitude, 1.002 without (tests/blender/test_addon_render.py checks the furnace). The lobes
-use Multiscatter GGX where the original uses GGX (see build_material_group). Lobes are summed with weights
-α_j by a chain of Mix Shader nodes, factor α_k / (α_0 + … + α_k), which also renormalizes the
-weights where filtering leaves Σα ≠ 1. Every other Principled input (linked or not) is carried
-over through the group's inputs. A material whose fit needs one lobe gets a one-lobe group (no
-mix chain): the group is built for the lobe slots the bake wrote.
+use Multiscatter GGX where the original uses GGX and does not transmit (see _lobe_bsdf). Lobes
+are summed with weights α_j by a chain of Mix Shader nodes, factor α_k / (α_0 + … + α_k), which
+also renormalizes the weights where filtering leaves Σα ≠ 1. Every other Principled input
+(linked or not) is carried over through the group's inputs. A material whose fit needs one lobe
+gets a one-lobe group (no mix chain): the group is built for the lobe slots the bake wrote.
 
 The group has two shader outputs: BSDF, the lobes above (Cycles, and both engines where the
 material's graph is the user's), and EEVEE BSDF, the same lobes narrowed toward grazing views
@@ -598,7 +598,11 @@ def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location
     # once between its microfacets, which the fine normals it stands for, each as narrow as
     # the original, hardly lose (white furnace, roughness 0.15: 0.81-0.86 of the reference
     # with GGX lobes, 0.88-0.98 with Multiscatter GGX). Same as GGX for narrow lobes.
-    bsdf.distribution = "MULTI_GGX" if principled.distribution == "GGX" else principled.distribution
+    # Not where the material transmits: Blender's Principled BSDF with Multiscatter GGX has no
+    # Transmission Roughness (Cycles' multiscatter glass takes Roughness), so rough glass would
+    # turn sharp; the lobes keep the original GGX there.
+    multiscatter = principled.distribution == "GGX" and not transmits(principled)
+    bsdf.distribution = "MULTI_GGX" if multiscatter else principled.distribution
     bsdf.subsurface_method = principled.subsurface_method
     bsdf.location = location
     for socket in carried:
@@ -608,6 +612,25 @@ def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location
     tree.links.new(roughness, bsdf.inputs["Roughness"])
     tree.links.new(normal, bsdf.inputs["Normal"])
     return bsdf
+
+
+TRANSMISSION_INPUTS = ("Transmission", "Transmission Roughness")
+
+
+def transmits(principled):
+    """Whether the Principled BSDF's transmission may matter: Transmission or Transmission
+    Roughness linked (live), animated or non-zero. Read when the group is built: a transmission
+    set on the group node after the bake shows once the material is baked again."""
+    tree = principled.id_data
+    for name in TRANSMISSION_INPUTS:
+        index = principled.inputs.find(name)
+        if index < 0:
+            continue
+        socket = principled.inputs[index]
+        if material_scan.live_link(socket) is not None or socket.default_value != 0.0 \
+                or node_animation.input_animated(tree, principled, index):
+            return True
+    return False
 
 
 def _mix_factors(tree, weights):

@@ -11,6 +11,8 @@ no pixel filter) must match a NumPy evaluation of the rule written from brdf.h, 
 nodes.py:  α'² = min(α² + 1.5/κ, 1), α = roughness², κ = (3R − R³)/(1 − R²), R ≤ 1, with 1/κ
 lowered by the half-float resolution 4e-4 (io/lobe_exr.h) and kept ≥ 0. (brdf.h's amplitude is not
 part of the shading: see nodes.py.)
+
+The lobe BSDFs keep GGX, rather than Multiscatter GGX, where the material transmits (structure).
 """
 import os
 import sys
@@ -217,6 +219,56 @@ def test_grazing_group_matches_its_formula_in_both_engines():
             print("%s: grazing roughness matches its formula (max error %.1e)" % (engine, worst))
 
 
+def _lobe_distributions(material):
+    group = next(n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeGroup" and n.get("ndfbake"))
+    return {n.distribution for n in group.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled"}
+
+
+def test_lobes_keep_ggx_where_the_material_transmits():
+    """The lobes use Multiscatter GGX for a GGX material, except where it transmits (Transmission
+    or Transmission Roughness non-zero, linked or animated): Blender's Principled BSDF with
+    Multiscatter GGX has no Transmission Roughness, so rough glass would turn sharp."""
+    from ndfbake import bake
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory)
+        tree = material.node_tree
+        principled = tree.nodes["Principled BSDF"]
+        value = tree.nodes.new("ShaderNodeValue")
+        value.outputs[0].default_value = 0.0
+
+        def set_up(transmission=0.0, transmission_roughness=0.0, link=None, muted=False, keyframe=False,
+                   distribution="GGX"):
+            for link_ in [l for l in tree.links if l.from_node == value]:
+                tree.links.remove(link_)
+            if tree.animation_data is not None:
+                tree.animation_data_clear()
+            principled.distribution = distribution
+            principled.inputs["Transmission"].default_value = transmission
+            principled.inputs["Transmission Roughness"].default_value = transmission_roughness
+            if link:
+                tree.links.new(value.outputs[0], principled.inputs[link]).is_muted = muted
+            if keyframe:
+                principled.inputs["Transmission"].keyframe_insert("default_value", frame=1)
+
+        cases = [("opaque", {}, {"MULTI_GGX"}),
+                 ("glass", {"transmission": 1.0, "transmission_roughness": 0.6}, {"GGX"}),
+                 ("transmission only", {"transmission": 0.5}, {"GGX"}),
+                 ("transmission roughness only", {"transmission_roughness": 0.3}, {"GGX"}),
+                 ("transmission linked", {"link": "Transmission"}, {"GGX"}),
+                 ("transmission roughness linked", {"link": "Transmission Roughness"}, {"GGX"}),
+                 ("transmission link muted", {"link": "Transmission", "muted": True}, {"MULTI_GGX"}),
+                 ("transmission animated", {"keyframe": True}, {"GGX"}),
+                 ("multiscatter glass", {"transmission": 1.0, "distribution": "MULTI_GGX"}, {"MULTI_GGX"})]
+        for name, setup, expected in cases:
+            set_up(**setup)
+            bake.bake_material(material, bake.BakeSettings(max_lobes=2, level_of_detail="RENDERER"))
+            got = _lobe_distributions(material)
+            print("  %s: lobes %s" % (name, ", ".join(sorted(got))))
+            h.expect(got == expected, "%s: lobe distributions %s, expected %s" % (name, got, expected))
+            bake.revert(material)
+
+
 if __name__ == "__main__":
     h.import_addon()
-    h.run([test_decode_group_matches_the_rule_in_both_engines, test_grazing_group_matches_its_formula_in_both_engines])
+    h.run([test_decode_group_matches_the_rule_in_both_engines, test_grazing_group_matches_its_formula_in_both_engines,
+           test_lobes_keep_ggx_where_the_material_transmits])
