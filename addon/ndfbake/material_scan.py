@@ -30,7 +30,9 @@ Choices the design leaves open, made here:
   normal map is refused (COLOR_SPACE), not baked raw: Blender renders such a material with the
   sRGB curve removed, so neither reading of the file would match both what the user sees now and
   what they meant; the fix is one click (Color Space -> Non-Color) and the message names it. This
-  keeps the rule that a bad input changes nothing in the file.
+  keeps the rule that a bad input changes nothing in the file. Linear, a colour space, is refused
+  too where Blender multiplies the image's colours by its alpha channel (ALPHA_ASSOCIATED; when:
+  _alpha_associated), with the same fix; most Linear-tagged normal maps have no alpha channel.
 - The base BRDF is Blender's GGX with the Principled BSDF's Roughness. A linked Roughness
   (a texture) cannot be one number: the fit then uses 0.5 for its lobe budget and report, and the
   node group still widens each lobe from the per-pixel roughness at shading time.
@@ -226,7 +228,30 @@ def check_image(image, node_name):
         return Problem("COLOR_SPACE", "image '%s' has Color Space '%s': a normal map is data, set its Color "
                                       "Space to Non-Color (ndfbake does not guess which decoding you meant)" % (
                                           name, colorspace))
+    if not image.colorspace_settings.is_data and _alpha_associated(image):
+        return Problem("ALPHA_ASSOCIATED", "image '%s' has Color Space '%s' and an alpha channel: Blender multiplies "
+                                           "its colours by alpha, so the normals it renders are not the file's, which "
+                                           "ndfbake would filter; set its Color Space to Non-Color (or its Alpha to "
+                                           "Channel Packed)" % (name, colorspace))
     return None
+
+
+def _alpha_associated(image):
+    """Whether Blender renders a colour (not data) image's RGB multiplied by its alpha: where it has
+    an alpha channel, unless its Alpha mode is Channel Packed or None, or it is an OpenEXR file
+    marked Premultiplied (Blender's default for EXR: both engines then render the stored RGB). The
+    library reads the file's RGB and ignores alpha. Measured in Blender 3.4, Cycles and EEVEE, RGB
+    (0.9, 0.5, 0.7) at alpha 0.4: an 8-bit PNG renders it times 0.4 (Straight or Premultiplied),
+    a 16-bit PNG marked Premultiplied times 0.4 in Cycles and as stored in EEVEE. Decided from the
+    ImBuf's planes (Image.depth), not the pixels: an alpha channel that is 1 everywhere is refused
+    too (one click fixes it), but the panel, which scans on every redraw, reads no pixels."""
+    if image.alpha_mode in ("CHANNEL_PACKED", "NONE"):
+        return False
+    if image.alpha_mode == "PREMUL" and image.file_format == "OPEN_EXR":
+        return False
+    depth = image.depth  # bits per pixel of the loaded buffer (0 if it cannot be loaded: the bake says why)
+    planes = depth // 4 if image.is_float else depth
+    return planes == 32
 
 
 def _linked_animation(tree, principled):

@@ -5,6 +5,7 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 
 Cases: a material without a normal map; an image missing on disk; a packed image; a generated
 image; an 8-bit normal map whose Image datablock is sRGB (refused: see material_scan.py for why);
+one tagged Linear with an alpha channel (Blender multiplies its colours by alpha);
 an object-space Normal Map node; a read-only output folder (the .blend's folder made read-only;
 as root, permission bits do not bind, so the bake runs under an unprivileged effective uid); a file
 where the lobe folder would go (left alone: the bake takes the next folder name); an unsaved .blend; a corrupt image file; a Normal Map fed by
@@ -109,6 +110,60 @@ def test_srgb_tagged_normal_map():
     def run(directory):
         material = h.baked_scene(directory, colorspace="sRGB")
         expect_refused(material, "COLOR_SPACE", ["'normal.png'", "'sRGB'", "Non-Color"], directory)
+    _case(run)
+
+
+def _with_alpha(directory, alpha=0.4):
+    """normal.png's normals with an alpha channel of `alpha` (a height map, say), as an 8-bit RGBA
+    PNG in `directory`; returns its path."""
+    source = bpy.data.images.load(os.path.join(directory, "normal.png"), check_existing=False)
+    width, height = source.size
+    pixels = list(source.pixels)
+    bpy.data.images.remove(source)
+    pixels[3::4] = [alpha] * (width * height)
+    image = bpy.data.images.new("with alpha", width, height, alpha=True)
+    image.pixels = pixels
+    path = os.path.join(directory, "normal_alpha.png")
+    image.filepath_raw, image.file_format = path, "PNG"
+    image.save()
+    bpy.data.images.remove(image)
+    return path
+
+
+def test_linear_normal_map_with_alpha():
+    """Linear is a colour space: Blender multiplies such an image's RGB by its alpha, so with an
+    alpha channel it renders other normals than the file holds, which the library reads. Refused
+    with the fix; accepted as Non-Color, with Alpha Channel Packed, as an OpenEXR marked
+    Premultiplied, and where there is no alpha."""
+    from ndfbake import material_scan
+    def run(directory):
+        material = h.baked_scene(directory, colorspace="Linear")
+        texture = material.node_tree.nodes["Normal Texture"]
+        h.expect(material_scan.scan(material).ok, "a Linear normal map without alpha is refused: %s"
+                 % material_scan.scan(material).problem)
+        texture.image = bpy.data.images.load(_with_alpha(directory))
+        texture.image.colorspace_settings.name = "Linear"
+        h.expect(texture.image.alpha_mode == "STRAIGHT" and texture.image.depth == 32, "not an RGBA PNG")
+        bpy.ops.wm.save_mainfile()
+        expect_refused(material, "ALPHA_ASSOCIATED", ["'normal_alpha.png'", "'Linear'", "alpha channel",
+                                                      "multiplies", "Non-Color"], directory)
+        texture.image.alpha_mode = "CHANNEL_PACKED"
+        h.expect(material_scan.scan(material).ok, "Channel Packed: %s" % material_scan.scan(material).problem)
+        texture.image.alpha_mode = "STRAIGHT"
+        texture.image.colorspace_settings.name = "Non-Color"
+        h.expect(material_scan.scan(material).ok, "Non-Color: %s" % material_scan.scan(material).problem)
+        # An RGBA OpenEXR marked Premultiplied (Blender's default for EXR) renders its stored RGB.
+        exr = bpy.data.images.new("exr", 4, 4, alpha=True, float_buffer=True)
+        exr.pixels = [0.5, 0.5, 1.0, 0.4] * 16
+        exr.filepath_raw, exr.file_format = os.path.join(directory, "normal_alpha.exr"), "OPEN_EXR"
+        exr.save()
+        bpy.data.images.remove(exr)
+        texture.image = bpy.data.images.load(os.path.join(directory, "normal_alpha.exr"))
+        h.expect((texture.image.colorspace_settings.name, texture.image.alpha_mode, texture.image.depth)
+                 == ("Linear", "PREMUL", 128), "not an RGBA EXR with Blender's defaults")
+        h.expect(material_scan.scan(material).ok, "Premultiplied EXR: %s" % material_scan.scan(material).problem)
+        texture.image.alpha_mode = "STRAIGHT"
+        h.expect(material_scan.scan(material).problem.code == "ALPHA_ASSOCIATED", "a Straight EXR is accepted")
     _case(run)
 
 
@@ -292,9 +347,8 @@ def test_non_finite_uvs():
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_linked_material, test_image_with_unsaved_edits, test_muted_normal_map, test_muted_normal_map_link,
-           test_non_finite_uvs,
-           test_material_without_normal_map, test_missing_image_file, test_packed_image, test_generated_image,
-           test_srgb_tagged_normal_map, test_object_space_normal_map, test_read_only_output_folder,
-           test_file_in_place_of_the_output_folder, test_unsaved_blend, test_corrupt_image_file,
-           test_normal_map_not_from_an_image_texture, test_two_normal_map_images,
-           test_one_file_through_two_image_datablocks])
+           test_non_finite_uvs, test_material_without_normal_map, test_missing_image_file, test_packed_image,
+           test_generated_image, test_srgb_tagged_normal_map, test_linear_normal_map_with_alpha,
+           test_object_space_normal_map, test_read_only_output_folder, test_file_in_place_of_the_output_folder,
+           test_unsaved_blend, test_corrupt_image_file, test_normal_map_not_from_an_image_texture,
+           test_two_normal_map_images, test_one_file_through_two_image_datablocks])
