@@ -334,14 +334,26 @@ def _relative(path):
         return path
 
 
+def _free_name(collection, wanted, own=None):
+    """`wanted`, or wanted.001, .002… where taken (by another ID than `own`): Blender 3.4 gives an
+    ID renamed to a taken name that name and renames the ID that had it, which must not happen to
+    a previous bake's."""
+    name, k = wanted, 0
+    while name in collection and collection[name] != own:
+        k += 1
+        name = "%s.%03d" % (wanted, k)
+    return name
+
+
 def _load_lobe_images(material_name, paths, pack, created):
-    """Lobe images (Non-Color, channel-packed alpha: A is data, α·r_z), named "<material> lobe j",
-    all new (a bake's folder is new: lobe_folders.new_folder); their names are appended to `created` as
-    they are made, for the caller to remove on an error."""
+    """Lobe images (Non-Color, channel-packed alpha: A is data, α·r_z), named "<material> lobe j"
+    (while a previous bake's images hold those names, another: _take_names), all new (a bake's
+    folder is new: lobe_folders.new_folder); their names are appended to `created` as they are
+    made, for the caller to remove on an error."""
     images = []
     for j, path in enumerate(paths):
         image = bpy.data.images.load(path)
-        image.name = "%s lobe %d" % (material_name, j)
+        image.name = _free_name(bpy.data.images, "%s lobe %d" % (material_name, j))
         image[nodes.TAG] = nodes.GROUP_VERSION
         created.append(image.name)
         image.filepath = _relative(path)
@@ -403,7 +415,10 @@ def _check_unchanged(material, job):
 def finish(job):
     """After a successful run(): moves a pending job's files into place, loads the lobe textures,
     builds the node group, bypasses the Principled BSDF(s) and stores the bake record. Replaces a
-    previous bake's nodes."""
+    previous bake's nodes, images and record only once the new ones are all built and wired
+    (nodes.replace_group_node): on an error the material is as it was before this bake, its
+    previous bake included. (One exception: where the user deleted a previous bake's group node,
+    its Principled BSDF is first wired back to where it was before that bake, as Revert does.)"""
     if job.error is not None:
         raise job.error
     material = _job_material(job)
@@ -426,37 +441,81 @@ def finish(job):
             raise BakeError("NATIVE_ERROR", "report.json in %s has no atlas layout" % job.out_dir)
         atlas = nodes.AtlasLayout(width=layout["width"], height=layout["height"], levels=layout["levels"])
 
-    old = material_scan.record(material)
-    if old:  # its nodes and images go now; its files stay for Ctrl-Z (lobe_folders.py)
-        _remove_nodes(material, old)
-        _remove_images(old.get("images", []))
+    old = material_scan.record(material) or {}
+    # The group nodes of the previous bake, by the Principled BSDF they stand for: replaced in place.
+    replacing, gone = {}, []
+    for target in old.get("targets", []):
+        key = target.get("group_node", "")
+        node = material_scan.recorded_node(tree, key, material_scan.node_role("group", key))
+        principled = material_scan.recorded_node(tree, target.get("principled", ""),
+                                                 material_scan.node_role("principled", key))
+        if node is not None and principled is not None and node.bl_idname == "ShaderNodeGroup":
+            replacing[principled.name] = (target, node)
+        else:
+            gone.append(target)
+    if gone:  # group nodes the user deleted: their Principled BSDFs get their links back first
+        _remove_nodes(material, {"targets": gone})
+    old_groups = [g for g in (bpy.data.node_groups.get(t.get("node_group", "")) for t in old.get("targets", []))
+                  if g is not None]
+    old_images = [i for i in (bpy.data.images.get(name) for name in old.get("images", [])) if i is not None]
 
-    targets, images, created = [], [], []
+    targets, images, created, inserted, replacements = [], [], [], [], []
+    groups_before = set(bpy.data.node_groups.keys())
     try:
         images = _load_lobe_images(material.name, paths, job.settings.pack, created)
+        groups = []
         for principled_name, normal_map_name, texture_name in job.targets:
+            current = replacing.get(principled_name, (None, None))[1]
+            groups.append(nodes.build_material_group(
+                "NDFB " + material.name, tree.nodes[principled_name], tree.nodes[normal_map_name],
+                tree.nodes[texture_name], images, atlas, job.lod, current=current))
+        for (principled_name, normal_map_name, texture_name), group in zip(job.targets, groups):
             principled = tree.nodes[principled_name]
             normal_map = tree.nodes[normal_map_name]
             texture = tree.nodes[texture_name]
-            group = nodes.build_material_group("NDFB " + material.name, principled, normal_map, texture, images,
-                                               atlas, job.lod)
             targets.append({"principled": principled_name, "normal_map": normal_map_name, "group_node": "",
                             "node_group": group.name, "bypassed": [], "eevee_output": "",
                             "principled_settings": nodes.principled_settings(principled)})
-            node, bypassed, eevee_output = nodes.insert_group_node(tree, group, principled, normal_map, texture)
-            targets[-1].update(group_node=node.name, bypassed=bypassed, eevee_output=eevee_output)
+            if principled_name in replacing:
+                old_target, old_node = replacing[principled_name]
+                replacement = nodes.replace_group_node(tree, group, principled, normal_map, texture, old_node)
+                replacements.append((targets[-1], old_target, replacement))
+                node = tree.nodes[replacement.node]
+                eevee = old_target.get("eevee_output", "")
+                eevee = material_scan.recorded_node(tree, eevee, material_scan.node_role(
+                    "eevee_output", old_target.get("group_node", ""))) if eevee else None
+                targets[-1].update(bypassed=replacement.bypassed, eevee_output=eevee.name if eevee else "")
+            else:
+                node, bypassed, eevee_output = nodes.insert_group_node(tree, group, principled, normal_map, texture)
+                inserted.append(targets[-1])
+                targets[-1].update(group_node=node.name, bypassed=bypassed, eevee_output=eevee_output)
             if job.lod is not None and bpy.context.scene.camera is not None:
                 nodes.drive_lod_inputs(node, bpy.context.scene, bpy.context.scene.camera)
     except Exception as e:
-        # A bug, not bad input: put the material back as it was before any bake, drop this bake's
-        # images and files, and say so (no half-built material is left behind).
-        _remove_nodes(material, {"targets": targets}, keep_edits=False)
+        # A bug, not bad input: take away what this bake added (its nodes, node groups, images and
+        # files), so that the material is as it was before it, a previous bake included; say so.
+        for _, _, replacement in reversed(replacements):
+            nodes.undo_replacement(tree, replacement)
+        _remove_nodes(material, {"targets": inserted}, keep_edits=False)
+        nodes.remove_unused_groups([name for name in bpy.data.node_groups.keys() if name not in groups_before])
         _remove_images(created)
-        if RECORD_KEY in material.keys():
-            del material[RECORD_KEY]
         lobe_folders.delete_bake_files(job.out_dir, os.listdir(job.out_dir))
         raise BakeError("INTERNAL", "building the node group of '%s' failed (%s: %s); the material is as it was "
-                        "before baking" % (material.name, type(e).__name__, e)) from e
+                        "before this bake" % (material.name, type(e).__name__, e)) from e
+
+    # Everything is built: the previous bake's nodes, node groups and images go (its files stay for
+    # Ctrl-Z: lobe_folders.py), and the new ones take their names.
+    for target, _, replacement in replacements:
+        target["group_node"] = nodes.commit_replacement(tree, replacement).name
+        eevee = tree.nodes.get(target["eevee_output"]) if target["eevee_output"] else None
+        if eevee is not None:  # (a record older than roles gave it none)
+            eevee[material_scan.ROLE_KEY] = material_scan.node_role("eevee_output", target["group_node"])
+    replaced = [id(old_target) for _, old_target, _ in replacements]
+    _remove_nodes(material, {"targets": [t for t, _ in replacing.values() if id(t) not in replaced]})
+    nodes.remove_unused_groups([group.name for group in old_groups])
+    _remove_images([image.name for image in old_images])
+    _take_names(material, targets, images)
+    created = [image.name for image in images]
 
     summary = summarize(report, job.seconds, len(images))
     if job.lod is not None:
@@ -481,6 +540,25 @@ def finish(job):
 
 
 # ---- whole bakes ---------------------------------------------------------------------------------
+
+def _take_names(material, targets, images):
+    """The new bake's images and node groups take the names a first bake gives them ("<material>
+    lobe j", "NDFB <material>", .001… where taken), which the previous bake's, now gone, held
+    while both existed."""
+    for j, image in enumerate(images):
+        image.name = _free_name(bpy.data.images, "%s lobe %d" % (material.name, j), image)
+    for target in targets:
+        group = bpy.data.node_groups.get(target["node_group"])
+        if group is None:
+            continue
+        previous = group.name
+        group.name = _free_name(bpy.data.node_groups, "NDFB " + material.name, group)
+        for node in group.nodes:  # its atlas table, named after it
+            table = node.node_tree if node.bl_idname == "ShaderNodeGroup" else None
+            if table is not None and table.get(nodes.TAG) is not None and table.name == previous + " atlas":
+                table.name = _free_name(bpy.data.node_groups, group.name + " atlas", table)
+        target["node_group"] = group.name
+
 
 def bake_material(material, settings=None, progress=None):
     """prepare + run + finish on the calling thread (scripts, `blender -b`, operator execute())."""

@@ -46,7 +46,7 @@ bake adds beside the user's (add_eevee_output) and Revert removes.
 OSL: Debian's Blender is built without OSL (bpy.app.build_options.cycles_osl is False), so no OSL
 Script variant is offered; `osl_status()` says so. The stock-node group works in both engines.
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import bpy
 
@@ -389,19 +389,28 @@ def atlas_table_group(name, atlas):
 
 # ---- the per-material group --------------------------------------------------------------------
 
-def carried_inputs(principled):
+def carried_inputs(principled, current=None):
     """Principled inputs passed through the group: every enabled input except Normal; the
     implicit-default vectors (Clearcoat Normal, Tangent) only when linked (not muted: a muted link
     renders as that default), since a group input cannot reproduce their "use the geometry"
-    default."""
+    default. `current`: see held_input."""
     carried = []
     for socket in principled.inputs:
         if not socket.enabled or socket.name == "Normal":
             continue
-        if socket.hide_value and material_scan.live_link(socket) is None:
+        if socket.hide_value and material_scan.live_link(held_input(principled, current, socket.name)) is None:
             continue
         carried.append(socket)
     return carried
+
+
+def held_input(principled, current, name):
+    """The socket that holds the Principled's input `name` as the user edits it now: on
+    `current`, the group node of the bake a re-bake replaces, where it has that input; else on the
+    Principled BSDF."""
+    if current is not None and name in current.inputs:
+        return current.inputs[name]
+    return principled.inputs[name]
 
 
 def _value(socket):
@@ -503,19 +512,25 @@ def _sample_level0(tree, gin, image, image_texture, has_vector, j, y):
     return tex.outputs["Color"], tex.outputs["Alpha"]
 
 
-def build_material_group(name, principled, normal_map, image_texture, lobe_images, atlas=None, lod=None):
+def build_material_group(name, principled, normal_map, image_texture, lobe_images, atlas=None, lod=None,
+                         current=None):
     """A group with the carried Principled inputs (+ Normal Strength, + Vector if the original
     texture's has a live (unmuted) link, + the level-of-detail constants with an atlas) and one
     BSDF output, shading through len(lobe_images) lobes: level-0 textures that the renderer
     filters itself (atlas None), or MIP atlases (AtlasLayout) sampled at the level of detail the
-    scene gives (lod: a scene_lod.LodPlan, required with an atlas)."""
+    scene gives (lod: a scene_lod.LodPlan, required with an atlas). For a re-bake, `current` is
+    the group node of the bake it replaces, which holds the Principled's inputs (held_input)."""
     tree = _new_group(name)
     decode = lobe_group()
-    carried = carried_inputs(principled)
+    carried = carried_inputs(principled, current)
+    # Not where the material transmits: Blender's Principled BSDF with Multiscatter GGX has no
+    # Transmission Roughness (Cycles' multiscatter glass takes Roughness), so rough glass would
+    # turn sharp; the lobes keep the original GGX there.
+    multiscatter = principled.distribution == "GGX" and not transmits(principled if current is None else current)
     for socket in carried:
         iface = _add_socket(tree, "INPUT", socket.bl_idname, socket.name)
         try:
-            iface.default_value = _value(socket)
+            iface.default_value = _value(held_input(principled, current, socket.name))
         except (AttributeError, TypeError):
             pass
     strength = _add_socket(tree, "INPUT", "NodeSocketFloat", "Normal Strength")
@@ -580,7 +595,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         for output, roughness, dy in (("BSDF", dec.outputs["Roughness"], 0),
                                       (EEVEE_BSDF, grazing.outputs["Roughness"], -450)):
             bsdf = _lobe_bsdf(tree, gin, principled, carried, roughness, nm.outputs["Normal"],
-                              "Lobe %d %s" % (j, output), (0, y + dy))
+                              "Lobe %d %s" % (j, output), (0, y + dy), multiscatter)
             shaders[output].append(bsdf.outputs["BSDF"])
         weights.append(dec.outputs["Weight"])
 
@@ -590,18 +605,15 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     return tree
 
 
-def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location):
+def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location, multiscatter):
     """A copy of the original Principled BSDF with the lobe's normal and roughness."""
     bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
     bsdf.name = bsdf.label = name
     # Multiple scattering: a widened GGX lobe loses the energy of light scattered more than
     # once between its microfacets, which the fine normals it stands for, each as narrow as
     # the original, hardly lose (white furnace, roughness 0.15: 0.81-0.86 of the reference
-    # with GGX lobes, 0.88-0.98 with Multiscatter GGX). Same as GGX for narrow lobes.
-    # Not where the material transmits: Blender's Principled BSDF with Multiscatter GGX has no
-    # Transmission Roughness (Cycles' multiscatter glass takes Roughness), so rough glass would
-    # turn sharp; the lobes keep the original GGX there.
-    multiscatter = principled.distribution == "GGX" and not transmits(principled)
+    # with GGX lobes, 0.88-0.98 with Multiscatter GGX). Same as GGX for narrow lobes. Not where
+    # the material transmits (build_material_group).
     bsdf.distribution = "MULTI_GGX" if multiscatter else principled.distribution
     bsdf.subsurface_method = principled.subsurface_method
     bsdf.location = location
@@ -617,18 +629,19 @@ def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location
 TRANSMISSION_INPUTS = ("Transmission", "Transmission Roughness")
 
 
-def transmits(principled):
-    """Whether the Principled BSDF's transmission may matter: Transmission or Transmission
-    Roughness linked (live), animated or non-zero. Read when the group is built: a transmission
-    set on the group node after the bake shows once the material is baked again."""
-    tree = principled.id_data
+def transmits(node):
+    """Whether the transmission of a Principled BSDF (or of the group node that holds its inputs
+    since a bake) may matter: Transmission or Transmission Roughness linked (live), animated or
+    non-zero. Read when the group is built: a transmission set on the group node after the bake
+    shows once the material is baked again."""
+    tree = node.id_data
     for name in TRANSMISSION_INPUTS:
-        index = principled.inputs.find(name)
+        index = node.inputs.find(name)
         if index < 0:
             continue
-        socket = principled.inputs[index]
+        socket = node.inputs[index]
         if material_scan.live_link(socket) is not None or socket.default_value != 0.0 \
-                or node_animation.input_animated(tree, principled, index):
+                or node_animation.input_animated(tree, node, index):
             return True
     return False
 
@@ -747,6 +760,112 @@ def insert_group_node(material_tree, group_tree, principled, normal_map, image_t
         raise
 
 
+# A re-bake's group node's name until the one it replaces goes (then it is named as a first bake's):
+# a name no other node tree uses, since renaming a node renames the animation paths naming it in
+# every ID.
+REBAKE_NAME = "ndfbake re-bake"
+
+
+@dataclass
+class Replacement:
+    """A re-bake's group node, not yet in place of the one it replaces (replace_group_node)."""
+    node: str                     # the new group node's name (REBAKE_NAME, made unique)
+    old: str                      # the name of the group node it replaces
+    principled: str
+    roles: dict                   # {node name: its ROLE_KEY value before (None: none)}
+    had_animation: bool           # whether the tree had animation data before
+    bypassed: list = field(default_factory=list)
+    moved: list = field(default_factory=list)
+
+
+def replace_group_node(material_tree, group_tree, principled, normal_map, image_texture, old):
+    """For a re-bake: adds the new group node in the place of `old`, the group node of the bake it
+    replaces, with old's inputs (the Principled's inputs as the user edits them now: held_input),
+    and moves onto it the links leaving old's shader outputs (the EEVEE output's too). Old stays
+    in the tree, untouched otherwise, until commit_replacement; undo_replacement puts the material
+    back exactly as it was (as on any error here). Keyframes and drivers of old's inputs, which go
+    by node name, move at the commit. Returns a Replacement."""
+    replacement = Replacement(node="", old=old.name, principled=principled.name,
+                              roles={n.name: n.get(material_scan.ROLE_KEY) for n in (principled, normal_map)},
+                              had_animation=material_tree.animation_data is not None)
+    node = material_tree.nodes.new("ShaderNodeGroup")
+    node.name = REBAKE_NAME
+    replacement.node = node.name
+    try:
+        _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture,
+                         replacement.bypassed, replacing=old, moved=replacement.moved)
+    except Exception:
+        undo_replacement(material_tree, replacement)
+        raise
+    return replacement
+
+
+def undo_replacement(material_tree, replacement):
+    """Takes a re-bake's group node away again: the links it took go back to the old node, the
+    roles back to the Principled and Normal Map nodes, its drivers (level of detail) go, and so
+    does the node. The material is then as it was before replace_group_node."""
+    nodes = material_tree.nodes
+    node, old = nodes.get(replacement.node), nodes.get(replacement.old)
+    for name, to_node, identifier, muted in reversed(replacement.moved):
+        target = nodes.get(to_node)
+        socket = _socket_by_identifier(target.inputs, identifier) if target is not None else None
+        if socket is None or old is None:
+            continue
+        for link in list(socket.links):
+            material_tree.links.remove(link)
+        material_tree.links.new(old.outputs[name], socket).is_muted = muted
+    for name, role in replacement.roles.items():
+        marked = nodes.get(name)
+        if marked is None:
+            continue
+        if role is not None:
+            marked[material_scan.ROLE_KEY] = role
+        elif material_scan.ROLE_KEY in marked.keys():
+            del marked[material_scan.ROLE_KEY]
+    if node is not None:
+        animation = material_tree.animation_data
+        if animation is not None:
+            prefix = node_animation.node_prefix(node.name)
+            for fcurve in [f for f in animation.drivers if f.data_path.startswith(prefix)]:
+                animation.drivers.remove(fcurve)
+            if not replacement.had_animation and not animation.drivers and animation.action is None \
+                    and not animation.nla_tracks:
+                material_tree.animation_data_clear()
+        nodes.remove(node)
+
+
+def commit_replacement(material_tree, replacement):
+    """Puts a re-bake's group node in the place of the old one for good: the keyframes and drivers
+    of old's inputs move to it (and the Principled's, as a first bake copies them, for inputs old
+    did not carry), old goes, and the new node takes the name a bake gives its node, the roles'
+    key with it (Blender renames the animation paths and driver variables that name it). Returns
+    the node."""
+    nodes = material_tree.nodes
+    node, old, principled = nodes[replacement.node], nodes[replacement.old], nodes[replacement.principled]
+    old_key = str(old.get(material_scan.ROLE_KEY, "")).partition(":")[2]
+    pairs, extra = [], []
+    for i, j in _shared_inputs(principled, node).items():
+        name = principled.inputs[i].name
+        if name in old.inputs:
+            k = old.inputs.find(name)
+            if not old.inputs[k].is_linked:
+                pairs.append((k, j))
+        elif not principled.inputs[i].is_linked:
+            extra.append((i, j))
+    node_animation.copy_input_animation(material_tree, old, node, pairs, move=True)
+    if extra:
+        node_animation.copy_input_animation(material_tree, principled, node, extra, move=False)
+    node_animation.remove_node_animation(material_tree, old.name)
+    node_animation.remove_node(material_tree, old)
+    new_key = node.name
+    node.name = "ndfbake"  # as _wire_group_node names a first bake's (made unique by Blender)
+    for marked in nodes:
+        role, _, key = str(marked.get(material_scan.ROLE_KEY, "")).partition(":")
+        if key and key in (new_key, old_key):
+            marked[material_scan.ROLE_KEY] = material_scan.node_role(role, node.name)
+    return node
+
+
 def add_eevee_output(material_tree, node, bypassed):
     """EEVEE draws the group's EEVEE BSDF (lobes narrowed at grazing views) through a Material
     Output of target EEVEE, which Blender prefers to a target-All output for EEVEE and its viewport;
@@ -782,30 +901,41 @@ def add_eevee_output(material_tree, node, bypassed):
     return eevee.name
 
 
-def _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture, bypassed):
+def _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture, bypassed,
+                     replacing=None, moved=None):
+    """Sets up the group node and moves onto it the links leaving the Principled's BSDF output
+    (recorded in `bypassed`); for a re-bake, the links leaving the shader outputs of `replacing`,
+    the group node it replaces, whose inputs it takes (held_input), each recorded in `moved` as
+    (output name, to_node name, to_socket identifier, muted) as it moves."""
     links = material_tree.links
     node.node_tree = group_tree
-    node.name = "ndfbake"
+    if replacing is None:  # a re-bake's node is named already (replace_group_node)
+        node.name = "ndfbake"
     node[TAG] = GROUP_VERSION
     for role, marked in (("group", node), ("principled", principled), ("normal_map", normal_map)):
         marked[material_scan.ROLE_KEY] = material_scan.node_role(role, node.name)
     node.label = "ndfbake: %d lobe%s" % (lobe_count(group_tree), "" if lobe_count(group_tree) == 1 else "s")
-    node.location = (principled.location.x, principled.location.y + GROUP_NODE_OFFSET)
-    node.width = max(node.width, 220)
-    node.parent = principled.parent
-    for socket in carried_inputs(principled):
-        _copy_input(links, socket, node.inputs[socket.name])
+    placed = replacing if replacing is not None else principled
+    node.location = (placed.location.x, placed.location.y + (0 if replacing is not None else GROUP_NODE_OFFSET))
+    node.width = max(placed.width if replacing is not None else node.width, 220)
+    node.parent = placed.parent
+    for socket in carried_inputs(principled, replacing):
+        _copy_input(links, held_input(principled, replacing, socket.name), node.inputs[socket.name])
     _copy_input(links, normal_map.inputs["Strength"], node.inputs["Normal Strength"])
     if "Vector" in node.inputs:  # made only where the texture's Vector has a live link
         links.new(material_scan.live_link(image_texture.inputs["Vector"]).from_socket, node.inputs["Vector"])
 
-    for link in list(principled.outputs["BSDF"].links):
-        bypassed.append((link.to_node.name, link.to_socket.identifier, bool(link.is_muted)))
-        to_socket = link.to_socket
-        muted = link.is_muted
-        links.remove(link)
-        new = links.new(node.outputs["BSDF"], to_socket)
-        new.is_muted = muted
+    sources = [("BSDF", principled.outputs["BSDF"])] if replacing is None else \
+        [(output.name, output) for output in replacing.outputs if output.type == "SHADER"]
+    for name, source in sources:
+        for link in list(source.links):
+            to_socket, muted = link.to_socket, bool(link.is_muted)
+            if name == "BSDF":
+                bypassed.append((link.to_node.name, to_socket.identifier, muted))
+            if moved is not None:
+                moved.append((name, link.to_node.name, to_socket.identifier, muted))
+            links.remove(link)
+            links.new(node.outputs[name], to_socket).is_muted = muted
 
 
 def _socket_by_identifier(sockets, identifier):

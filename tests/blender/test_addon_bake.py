@@ -9,6 +9,8 @@ saved as a .blend in a temporary folder.
   lobe textures land in //<material>.ndfbake/ with relative paths.
 - Revert restores every node, link, socket value and property exactly (full dump compared) and
   the data-blocks as they were; the files and the folder go when the saved file is closed.
+- An error while the nodes are built leaves the material exactly as it was before that bake: a
+  failed re-bake keeps the previous bake (group node and its edits, node groups, images, record).
 - Ctrl-Z after a re-bake and after a Revert gives back a material whose lobe images load
   (test_addon_folders.py).
 - The operators work in the background; re-baking with fewer lobes emits a one-lobe group and
@@ -334,7 +336,7 @@ def _bake_with_a_bug_in(material, function, **settings):
     from ndfbake import bake, nodes
     original = getattr(nodes, function)
 
-    def broken(*args):
+    def broken(*args, **kwargs):
         raise RuntimeError("simulated bug")
     setattr(nodes, function, broken)
     try:
@@ -345,19 +347,47 @@ def _bake_with_a_bug_in(material, function, **settings):
 
 
 def test_failure_while_building_nodes_rolls_back():
+    """An error while the nodes are built (a bug) leaves the material as it was before that bake:
+    unbaked after a failed first bake; after a failed re-bake, with the previous bake in place
+    (its group node with the user's edit on it, node groups, images, drivers, record), so that
+    bake_materials' promise holds. Only the failed bake's files go."""
     from ndfbake import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
-        before, data_before, files_before = h.dump_material(material), h.data_counts(), h.listing(directory)
-        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
-        error = _bake_with_a_bug_in(material, "_wire_group_node", max_lobes=3)
-        h.expect(error.code == "INTERNAL" and "simulated bug" in error.message, error.message)
-        h.expect(h.dump_material(material) == before, "a half-built material was left")
-        h.expect(h.data_counts() == data_before, "data-blocks left: %s" % h.data_counts())
+        bpy.ops.object.camera_add(location=(0.0, 0.0, 4.0))  # level of detail: drivers on the node
+        bpy.context.scene.camera = bpy.context.active_object
         bpy.ops.wm.save_mainfile()
-        h.close_file()  # the first bake's folder, which the saved file does not use, goes
-        h.expect([f for f in h.listing(directory) if f != "scene.blend1"] == files_before,
-                 "files left after the save: %s" % h.listing(directory))
+        before, data_before, files_before = h.dump_material(material), h.data_counts(), h.listing(directory)
+        error = _bake_with_a_bug_in(material, "_wire_group_node", max_lobes=2)
+        h.expect(error.code == "INTERNAL" and "simulated bug" in error.message
+                 and "as it was before this bake" in error.message, error.message)
+        h.expect(h.dump_material(material) == before, "a failed first bake left a half-built material: %s"
+                 % h.differences(before, h.dump_material(material)))
+        h.expect(h.data_counts() == data_before, "data-blocks left: %s" % h.data_counts())
+
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        tree = material.node_tree
+        h.expect(tree.animation_data is not None and tree.animation_data.drivers, "the bake made no drivers")
+        tree.nodes["ndfbake"].inputs["Base Color"].default_value = (0.0, 0.0, 1.0, 1.0)  # the user's edit
+        bpy.ops.wm.save_mainfile()
+        baked, data_baked, record = h.dump_material(material), h.data_counts(), _record(material)
+        files_baked = [f for f in h.listing(directory) if f != "scene.blend1"]
+        for function in ("build_material_group", "_wire_group_node", "drive_lod_inputs"):
+            error = _bake_with_a_bug_in(material, function, max_lobes=3)
+            h.expect(error.code == "INTERNAL" and "simulated bug" in error.message
+                     and "as it was before this bake" in error.message, error.message)
+            h.expect(h.dump_material(material) == baked, "a re-bake failing in %s changed the material: %s"
+                     % (function, h.differences(baked, h.dump_material(material))))
+            h.expect(h.data_counts() == data_baked, "a re-bake failing in %s: data-blocks %s, before %s"
+                     % (function, h.data_counts(), data_baked))
+            h.expect(_record(material) == record, "a re-bake failing in %s changed the record" % function)
+        h.expect(tuple(tree.nodes["ndfbake"].inputs["Base Color"].default_value) == (0.0, 0.0, 1.0, 1.0),
+                 "the edit on the group node went")
+        bpy.ops.wm.save_mainfile()
+        h.close_file()  # the failed bakes' folders, which no saved file uses, go
+        h.expect([f for f in h.listing(directory) if f != "scene.blend1"] == files_baked,
+                 "files after the save: %s, after the bake: %s" % (h.listing(directory), files_baked))
+        h.expect(files_baked != files_before, "the bake wrote no files")
 
 
 def _ramped_scene(directory):
