@@ -702,12 +702,21 @@ def _shared_inputs(principled, node):
     return pairs
 
 
-def carry_animation(material_tree, principled, node):
+def _strength_pair(normal_map, node):
+    """[(the Normal Map's Strength index, the group node's Normal Strength index)]."""
+    return [(normal_map.inputs.find("Strength"), node.inputs.find("Normal Strength"))]
+
+
+def carry_animation(material_tree, principled, node, normal_map):
     """Copies the keyframes and drivers of the Principled's unlinked inputs to the group node's
-    inputs of the same name, which hold those values after the bake: an animated colour or emission
-    goes on animating, and drivers that read those inputs read the node's."""
+    inputs of the same name, which hold those values after the bake, and the Normal Map's Strength's
+    to Normal Strength: an animated colour, emission or bump strength goes on animating, and
+    drivers that read those inputs read the node's."""
     pairs = [(i, j) for i, j in _shared_inputs(principled, node).items() if not principled.inputs[i].is_linked]
     node_animation.copy_input_animation(material_tree, principled, node, pairs, move=False)
+    if not normal_map.inputs["Strength"].links:
+        node_animation.copy_input_animation(material_tree, normal_map, node, _strength_pair(normal_map, node),
+                                            move=False)
 
 
 def _copy_input(links, source, target):
@@ -730,16 +739,22 @@ def _copy_input(links, source, target):
         target.default_value = source.default_value
 
 
-def write_back_inputs(material_tree, node, principled):
+def write_back_inputs(material_tree, node, principled, normal_map=None):
     """The group node's inputs as the user left them (values, links, keyframes, drivers) go back to
-    the Principled BSDF before the node goes, so that Revert keeps the user's edits on the node and
-    a re-bake starts from them. Unedited, the Principled is left exactly as it was."""
+    the Principled BSDF, and Normal Strength to the Normal Map's Strength, before the node goes, so
+    that Revert keeps the user's edits on the node and a re-bake starts from them. Unedited, the
+    Principled and the Normal Map are left exactly as they were."""
     pairs = []
     for i, j in _shared_inputs(principled, node).items():
         _copy_input(material_tree.links, node.inputs[j], principled.inputs[i])
         if not node.inputs[j].is_linked:
             pairs.append((j, i))
     node_animation.copy_input_animation(material_tree, node, principled, pairs, move=True)
+    if normal_map is not None and "Normal Strength" in node.inputs:
+        _copy_input(material_tree.links, node.inputs["Normal Strength"], normal_map.inputs["Strength"])
+        if not node.inputs["Normal Strength"].links:
+            node_animation.copy_input_animation(material_tree, node, normal_map,
+                                                [(j, i) for i, j in _strength_pair(normal_map, node)], move=True)
 
 
 def insert_group_node(material_tree, group_tree, principled, normal_map, image_texture):
@@ -753,7 +768,7 @@ def insert_group_node(material_tree, group_tree, principled, normal_map, image_t
     bypassed = []
     try:
         _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture, bypassed)
-        carry_animation(material_tree, principled, node)
+        carry_animation(material_tree, principled, node, normal_map)
         return node, bypassed, add_eevee_output(material_tree, node, bypassed)
     except Exception:
         remove_group_node(material_tree, node.name, principled.name, bypassed, keep_edits=False)
@@ -852,6 +867,8 @@ def commit_replacement(material_tree, replacement):
                 pairs.append((k, j))
         elif not principled.inputs[i].is_linked:
             extra.append((i, j))
+    if "Normal Strength" in old.inputs and not old.inputs["Normal Strength"].links:
+        pairs.append((old.inputs.find("Normal Strength"), node.inputs.find("Normal Strength")))
     node_animation.copy_input_animation(material_tree, old, node, pairs, move=True)
     if extra:
         node_animation.copy_input_animation(material_tree, principled, node, extra, move=False)
@@ -921,7 +938,8 @@ def _wire_group_node(material_tree, node, group_tree, principled, normal_map, im
     node.parent = placed.parent
     for socket in carried_inputs(principled, replacing):
         _copy_input(links, held_input(principled, replacing, socket.name), node.inputs[socket.name])
-    _copy_input(links, normal_map.inputs["Strength"], node.inputs["Normal Strength"])
+    strength = replacing.inputs["Normal Strength"] if replacing is not None else normal_map.inputs["Strength"]
+    _copy_input(links, strength, node.inputs["Normal Strength"])
     if "Vector" in node.inputs:  # made only where the texture's Vector has a live link
         links.new(material_scan.live_link(image_texture.inputs["Vector"]).from_socket, node.inputs["Vector"])
 
@@ -993,7 +1011,8 @@ def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee
     group_tree = node.node_tree if node is not None else None
     if node is not None and principled is not None:
         if keep_edits:
-            write_back_inputs(material_tree, node, principled)
+            write_back_inputs(material_tree, node, principled,
+                              find(normal_map_name, "normal_map") if normal_map_name else None)
         else:
             node_animation.retarget_variables(material_tree, node, principled,
                                               [(j, i) for i, j in _shared_inputs(principled, node).items()])

@@ -454,6 +454,42 @@ def test_edits_on_the_group_node_survive_rebake_and_revert():
                  "Revert did not keep the node's keyframed colour: %s" % (tuple(principled.default_value),))
 
 
+def test_the_normal_maps_strength_is_carried_like_the_principleds_inputs():
+    """Normal Strength on the group node stands for the Normal Map's Strength: its keyframes go on
+    animating after a bake, an edit on the node survives a re-bake, and Revert leaves the node's
+    value and keyframes on the Normal Map."""
+    from ndfbake import bake
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory)
+        tree = material.node_tree
+        strength = tree.nodes["Normal Map"].inputs["Strength"]
+        for frame, value in ((1, 0.0), (11, 1.0)):
+            strength.default_value = value
+            strength.keyframe_insert("default_value", frame=frame)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        scene = bpy.context.scene
+        scene.frame_set(6)
+        h.expect(abs(tree.nodes["ndfbake"].inputs["Normal Strength"].default_value - 0.5) < 0.05,
+                 "Normal Strength at frame 6: %g, the Normal Map's keyframes give 0.5"
+                 % tree.nodes["ndfbake"].inputs["Normal Strength"].default_value)
+        for frame, value in ((1, 0.2), (11, 0.4)):  # the user re-keys it on the node
+            node_strength = tree.nodes["ndfbake"].inputs["Normal Strength"]
+            node_strength.default_value = value
+            node_strength.keyframe_insert("default_value", frame=frame)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        scene.frame_set(11)
+        h.expect(abs(tree.nodes["ndfbake"].inputs["Normal Strength"].default_value - 0.4) < 1e-4,
+                 "the re-bake lost Normal Strength keyed on the node: %g"
+                 % tree.nodes["ndfbake"].inputs["Normal Strength"].default_value)
+        bake.revert(material)
+        scene.frame_set(1)
+        strength = tree.nodes["Normal Map"].inputs["Strength"]
+        h.expect(abs(strength.default_value - 0.2) < 1e-4, "Revert left the Normal Map's Strength at %g, not "
+                 "the node's 0.2" % strength.default_value)
+        paths = sorted(f.data_path for f in tree.animation_data.action.fcurves)
+        h.expect(paths == ['nodes["Normal Map"].inputs[0].default_value'], "keyframes after revert: %s" % paths)
+
+
 def test_two_materials_sharing_an_action_bake_and_revert():
     from ndfbake import bake
     with h.scratch_dir() as directory:
@@ -731,7 +767,9 @@ if __name__ == "__main__":
            test_operators_rebake_fewer_lobes_and_revert, test_save_reopen_then_revert,
            test_bake_all_bakes_what_the_scene_renders, test_linked_inputs_are_carried_and_restored,
            test_a_user_graph_downstream_gets_no_eevee_output, test_pack_option, test_animated_inputs_keep_animating,
-           test_edits_on_the_group_node_survive_rebake_and_revert, test_two_materials_sharing_an_action_bake_and_revert,
+           test_edits_on_the_group_node_survive_rebake_and_revert,
+           test_the_normal_maps_strength_is_carried_like_the_principleds_inputs,
+           test_two_materials_sharing_an_action_bake_and_revert,
            test_nla_strips_and_driver_variables_follow_the_inputs, test_curve_settings_and_deletions_on_the_node_survive,
            test_a_copy_sharing_the_action_keeps_its_own_edits,
            test_driver_variables_by_socket_name_and_on_the_material_follow, test_a_linked_action_is_refused,
