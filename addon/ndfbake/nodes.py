@@ -671,8 +671,8 @@ def _mix_chain(tree, shaders, factors, y):
 
 def drive_lod_inputs(node, scene, camera_object):
     """Drivers that keep the group node's Pixel Angle (perspective) or Pixel Size (orthographic)
-    equal to scene_lod.camera_footprint's as the camera's lens, sensor or the render resolution
-    change (a 50% preview, a focal-length animation). Simple expressions only: Blender evaluates
+    equal to scene_lod.camera_footprint's as the camera's lens, sensor (size and fit) or the render
+    resolution (size, percentage, pixel aspect) change (a 50% preview, a focal-length animation). Simple expressions only: Blender evaluates
     them without Python, so they work in files whose scripts are not trusted. Panoramic cameras
     and the texel density (a property of the meshes) keep their baked values."""
     formula = scene_lod.footprint_driver(camera_object)
