@@ -173,13 +173,20 @@ def _undoable(operator, what):
     bpy.ops.ed.undo_push(message=what)
 
 
+def _baked_with_undo(directory):
+    """baked_scene, then a bake of Bumpy through the operator with the undo steps a window pushes.
+    Returns the bake's folder ('//…')."""
+    from ndfbake import material_scan
+    h.baked_scene(directory)
+    bpy.ops.ed.undo_push(message="ndfbake test scene")
+    _undoable(bpy.ops.ndfbake.bake, "bake")
+    return material_scan.record(bpy.data.materials["Bumpy"])["folder"]
+
+
 def test_undo_after_rebake_and_revert_finds_the_files():
     from ndfbake import bake, material_scan
     with h.scratch_dir() as directory:
-        h.baked_scene(directory)
-        bpy.ops.ed.undo_push(message="ndfbake test scene")
-        _undoable(bpy.ops.ndfbake.bake, "bake")
-        first = material_scan.record(bpy.data.materials["Bumpy"])["folder"]
+        first = _baked_with_undo(directory)
         bpy.data.materials["Bumpy"].ndfbake_settings.max_lobes = 1
         _undoable(bpy.ops.ndfbake.bake, "re-bake")
         second = material_scan.record(bpy.data.materials["Bumpy"])["folder"]
@@ -272,11 +279,8 @@ def test_folders_other_blend_files_use_are_kept():
 def test_undo_after_a_save_finds_the_files():
     from ndfbake import material_scan
     with h.scratch_dir() as directory:
-        h.baked_scene(directory)
-        bpy.ops.ed.undo_push(message="ndfbake test scene")
-        _undoable(bpy.ops.ndfbake.bake, "bake")
+        first = _baked_with_undo(directory)
         bpy.ops.wm.save_mainfile()
-        first = material_scan.record(bpy.data.materials["Bumpy"])["folder"]
         bpy.data.materials["Bumpy"].ndfbake_settings.max_lobes = 1
         _undoable(bpy.ops.ndfbake.bake, "re-bake")
         bpy.ops.wm.save_mainfile()
@@ -287,12 +291,9 @@ def test_undo_after_a_save_finds_the_files():
 
 
 def test_delete_unused_folders_keeps_what_ctrl_z_brings_back():
-    from ndfbake import bake, lobe_folders, material_scan
+    from ndfbake import bake, lobe_folders
     with h.scratch_dir() as directory:
-        h.baked_scene(directory)
-        bpy.ops.ed.undo_push(message="ndfbake test scene")
-        _undoable(bpy.ops.ndfbake.bake, "bake")
-        folder = material_scan.record(bpy.data.materials["Bumpy"])["folder"]
+        folder = _baked_with_undo(directory)
         bpy.ops.wm.save_mainfile()  # a save used the folder: closing the file keeps it
         _undoable(bpy.ops.ndfbake.revert, "revert")
         bpy.ops.wm.save_mainfile()  # neither the file nor its saved copy uses it now; Ctrl-Z does
