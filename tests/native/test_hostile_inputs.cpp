@@ -783,12 +783,16 @@ public:
     GuardedMemory(const GuardedMemory&) = delete;
     GuardedMemory& operator=(const GuardedMemory&) = delete;
 
-    // The first `bytes` bytes of `full` (struct_size set to `bytes`), ending at the guard page.
+    // The first `bytes` bytes of `full` (struct_size set to `bytes`), ending at the guard page but
+    // for the padding that aligns the struct as its type needs (any caller's struct is aligned;
+    // UBSan rejects a misaligned one): fewer than alignof(Options) bytes, so a read of the field
+    // just past struct_size may land there, but reads of the fields beyond it do not.
     template <typename Options>
     const Options* place(Options full, size_t bytes)
     {
         full.struct_size = uint32_t(bytes);
-        char* at = memory_ + page_ - bytes;
+        const size_t span = (bytes + alignof(Options) - 1) / alignof(Options) * alignof(Options);
+        char* at = memory_ + page_ - span;
         std::memcpy(at, &full, bytes);
         return reinterpret_cast<const Options*>(at);
     }
