@@ -46,9 +46,7 @@ void encode_lobe(const VmfLobe& lobe, float* rgba)
         rgba[0] = rgba[1] = rgba[2] = rgba[3] = 0.0f;
         return;
     }
-    // κ at the cap stands for a single direction (level 0's fine normals; texels whose normals
-    // agree): EM stops at kKappaMax for its numerics, the texture stores the limit |r| = 1.
-    const float r = float(lobe_resultant(lobe.kappa));
+    const float r = float(lobe_resultant(lobe.kappa));  // 1 at the κ cap: a single direction
     rgba[0] = lobe.alpha;
     rgba[1] = lobe.alpha * r * lobe.mu.x;
     rgba[2] = lobe.alpha * r * lobe.mu.y;
