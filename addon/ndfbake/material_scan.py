@@ -97,37 +97,35 @@ def live_link(socket):
     return None
 
 
-def muted_link(socket):
-    """The muted link on the way to `socket` through reroutes, or None: what cuts a chain that
-    upstream() does not follow."""
+def _trace(socket):
+    """(node, output socket, None) feeding `socket` through reroutes; (None, None, the muted link)
+    where a muted link cuts the chain; (None, None, None) where nothing feeds it. Links, not
+    is_linked: Blender's tree updates clear is_linked where the link is muted."""
     seen = set()
-    while socket is not None and socket.links:  # not is_linked: Blender's updates clear it for a muted link
+    while socket is not None and socket.links:
         link = socket.links[0]
         if link.is_muted:
-            return link
-        node = link.from_node
-        if node.bl_idname != "NodeReroute" or node.name in seen:
-            return None
-        seen.add(node.name)
-        socket = node.inputs[0]
-    return None
-
-
-def upstream(socket):
-    """The node and output socket feeding `socket`, through reroutes; (None, None) if unlinked or
-    cut by a muted link (a muted link is no link: Blender renders as if it were not there)."""
-    seen = set()
-    while socket is not None:
-        link = live_link(socket)
-        if link is None:
-            break
+            return None, None, link
         node = link.from_node
         if node.bl_idname == "NodeReroute" and node.name not in seen:
             seen.add(node.name)
             socket = node.inputs[0]
             continue
-        return node, link.from_socket
-    return None, None
+        return node, link.from_socket, None
+    return None, None, None
+
+
+def muted_link(socket):
+    """The muted link on the way to `socket` through reroutes, or None: what cuts a chain that
+    upstream() does not follow."""
+    return _trace(socket)[2]
+
+
+def upstream(socket):
+    """The node and output socket feeding `socket`, through reroutes; (None, None) if unlinked or
+    cut by a muted link (a muted link is no link: Blender renders as if it were not there)."""
+    node, output, _ = _trace(socket)
+    return node, output
 
 
 def active_outputs(tree):
