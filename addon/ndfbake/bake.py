@@ -510,8 +510,8 @@ def finish(job):
         eevee = tree.nodes.get(target["eevee_output"]) if target["eevee_output"] else None
         if eevee is not None:  # (a record older than roles gave it none)
             eevee[material_scan.ROLE_KEY] = material_scan.node_role("eevee_output", target["group_node"])
-    replaced = [id(old_target) for _, old_target, _ in replacements]
-    _remove_nodes(material, {"targets": [t for t, _ in replacing.values() if id(t) not in replaced]})
+    baked = {principled_name for principled_name, _, _ in job.targets}  # each replaced above
+    _remove_nodes(material, {"targets": [t for name, (t, _) in replacing.items() if name not in baked]})
     nodes.remove_unused_groups([group.name for group in old_groups])
     _remove_images([image.name for image in old_images])
     _take_names(material, targets, images)
