@@ -729,12 +729,11 @@ def _copy_input(links, source, target):
         if not (current is not None and current.from_socket == link.from_socket
                 and current.is_muted == link.is_muted):
             links.new(link.from_socket, target).is_muted = link.is_muted
-        if not link.is_muted or _value(target) == _value(source):
-            return
-        target.default_value = source.default_value
-        return
-    for link in list(target.links):
-        links.remove(link)
+        if not link.is_muted:
+            return  # the link decides what renders
+    else:
+        for link in list(target.links):
+            links.remove(link)
     if _value(target) != _value(source):
         target.default_value = source.default_value
 
