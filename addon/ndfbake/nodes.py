@@ -788,8 +788,13 @@ class Replacement:
     principled: str
     roles: dict                   # {node name: its ROLE_KEY value before (None: none)}
     had_animation: bool           # whether the tree had animation data before
-    bypassed: list = field(default_factory=list)
+    # The links moved off old's shader outputs: (output name, to_node name, to_socket identifier, muted).
     moved: list = field(default_factory=list)
+
+    @property
+    def bypassed(self):
+        """The moved links that leave the BSDF output, as a bake record keeps them."""
+        return [(to_node, identifier, muted) for name, to_node, identifier, muted in self.moved if name == "BSDF"]
 
 
 def replace_group_node(material_tree, group_tree, principled, normal_map, image_texture, old):
@@ -807,7 +812,7 @@ def replace_group_node(material_tree, group_tree, principled, normal_map, image_
     replacement.node = node.name
     try:
         _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture,
-                         replacement.bypassed, replacing=old, moved=replacement.moved)
+                         [], replacing=old, moved=replacement.moved)
     except Exception:
         undo_replacement(material_tree, replacement)
         raise
