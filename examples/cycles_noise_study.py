@@ -1,0 +1,192 @@
+"""Where Cycles' 16-spp error on the demo scene comes from: noise against the same material's
+converged render, bias of that render against the reference, under a chosen world and lobe choice.
+The README's "Open problems" (image error in Cycles) quotes its figures.
+
+    blender -b --factory-startup --python-exit-code 1 --python examples/cycles_noise_study.py -- \
+        --out DIR [--world sunset] [--sun-lamp] [--reference-samples 512] [--converged-samples 256] \
+        [--variants widened,narrowed,narrowed-ggx] [--width 128 --height 72] [--library PATH]
+
+The scene is demo_scene.py's, under Blender's studio world --world (its sun or brightest spot 4
+degrees right of the view, as in the demo). --sun-lamp moves a compact sun out of the HDR into an
+energy-matched Sun lamp (split_sun), which Cycles samples directly instead of through the world's
+luminance map: it separates the renderer's sampling of a small bright source from the material.
+For the naive normal maps and then for each lobe variant, the script renders 16 spp with three seeds
+and --converged-samples once, and prints per region (far ground, far spheres): rmse16 (the issue's
+figure, against the reference), noise (16 spp against the converged render), bias (converged against
+the reference; it includes the reference's own noise), block (4x4 mean luminance error at 16 spp,
+and of the converged render) and the converged render's mean luminance beside the reference's.
+Variants: widened (the baked groups as Cycles draws them), narrowed (Cycles drawing the groups'
+EEVEE BSDF output, the lobes narrowed at grazing views), and either with -ggx (the lobes'
+Multiscatter GGX set to GGX).
+"""
+import argparse
+import json
+import math
+import os
+import sys
+
+import bpy
+import mathutils
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import demo_scene  # noqa: E402
+import image_error  # noqa: E402
+
+WORLDS = "/usr/share/blender/datafiles/studiolights/world"
+SEEDS = (0, 2, 3)
+REGIONS = ("ground_far", "spheres_far")
+# A sun is the few pixels above SUN_THRESHOLD of the brightest (then the looser fallback); more
+# than SUN_MAX_PIXELS there is no compact sun (an overcast sky, a window-lit studio) to split off.
+SUN_THRESHOLDS = (0.02, 0.1)
+SUN_MAX_PIXELS = 64
+
+
+def split_sun(scene):
+    """Moves the world's compact sun into a Sun lamp: the sun's pixels take the median of the ring
+    around them, and the lamp gets the irradiance they held above it (∑ (L - fill) dω, per
+    channel), their luminance-weighted mean direction (through the world's Mapping rotation) and
+    the angular diameter of a disc of their solid angle. Returns a description, or None."""
+    tree = scene.world.node_tree
+    env = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeTexEnvironment")
+    mapping = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeMapping")
+    w, h = env.image.size
+    px = np.empty(w * h * 4, np.float32)
+    env.image.pixels.foreach_get(px)
+    px = px.reshape(h, w, 4).copy()
+    lum = image_error.luminance(px)
+    for threshold in SUN_THRESHOLDS:
+        sun = lum > threshold * lum.max()
+        if sun.sum() <= SUN_MAX_PIXELS:
+            break
+    else:
+        return None
+    # Equirectangular texel solid angle; Blender's rows start at the bottom (the nadir).
+    polar = (np.arange(h) + 0.5) / h * math.pi
+    solid_angle = np.repeat(((2 * math.pi / w) * (math.pi / h) * np.sin(polar))[:, None], w, axis=1)
+    ys, xs = np.nonzero(sun)
+    ring = (slice(max(ys.min() - 4, 0), ys.max() + 5), slice(max(xs.min() - 4, 0), xs.max() + 5))
+    fill = np.median(px[ring][..., :3][~sun[ring]], axis=0)
+    irradiance = np.maximum(((px[..., :3] - fill) * (solid_angle * sun)[..., None]).sum(axis=(0, 1)), 0.0)
+    weights = (lum * solid_angle)[ys, xs]
+    u = float(((xs + 0.5) / w * weights).sum() / weights.sum())
+    v = float(((ys + 0.5) / h * weights).sum() / weights.sum())
+    elevation = (v - 0.5) * math.pi
+    azimuth = (0.5 - u) * 2.0 * math.pi - mapping.inputs["Rotation"].default_value[2]  # undo the world's turn
+    direction = mathutils.Vector((math.cos(elevation) * math.cos(azimuth), math.cos(elevation) * math.sin(azimuth),
+                                  math.sin(elevation)))
+    px[sun, :3] = fill
+    image = bpy.data.images.new(env.image.name + " without sun", w, h, alpha=False, float_buffer=True)
+    image.colorspace_settings.name = "Linear"
+    image.pixels.foreach_set(px.ravel())
+    env.image = image
+    lamp = bpy.data.lights.new("Sun", "SUN")
+    strength = float(image_error.luminance(irradiance))
+    lamp.energy = strength
+    lamp.color = tuple(float(c) for c in irradiance / max(strength, 1e-12))
+    lamp.angle = 2.0 * math.acos(1.0 - float((solid_angle * sun).sum()) / (2.0 * math.pi))
+    obj = bpy.data.objects.new("Sun", lamp)
+    scene.collection.objects.link(obj)
+    obj.rotation_euler = direction.to_track_quat("Z", "Y").to_euler()  # the lamp shines down its -Z
+    return {"pixels": int(sun.sum()), "strength": strength, "angle_degrees": math.degrees(lamp.angle),
+            "elevation_degrees": math.degrees(elevation)}
+
+
+def use_variant(variant):
+    """Sets the baked groups up as `variant` draws them; returns a function that undoes it."""
+    undo = []
+    if variant.startswith("narrowed"):
+        from ndfbake import nodes
+        for material in bpy.data.materials:
+            if not material.use_nodes:
+                continue
+            tree = material.node_tree
+            for link in list(tree.links):
+                group, output = link.from_node, link.to_node
+                if group.bl_idname == "ShaderNodeGroup" and link.from_socket.name == "BSDF" \
+                        and output.bl_idname == "ShaderNodeOutputMaterial" and output.target in ("ALL", "CYCLES"):
+                    to_socket = link.to_socket
+                    tree.links.new(group.outputs[nodes.EEVEE_BSDF], to_socket)
+                    undo.append(lambda t=tree, g=group, s=to_socket: t.links.new(g.outputs["BSDF"], s))
+    if variant.endswith("-ggx"):
+        for group in bpy.data.node_groups:
+            for node in group.nodes:
+                if node.bl_idname == "ShaderNodeBsdfPrincipled" and node.distribution == "MULTI_GGX":
+                    node.distribution = "GGX"
+                    undo.append(lambda n=node: setattr(n, "distribution", "MULTI_GGX"))
+    return lambda: [u() for u in reversed(undo)]
+
+
+def study(out, world, sun_lamp, reference_samples, converged_samples, variants, width, height):
+    demo_scene.WORLD_IMAGE = os.path.join(WORLDS, world + ".exr")
+    info = demo_scene.build_scene(out, width, height)
+    scene = bpy.context.scene
+    lamp = split_sun(scene) if sun_lamp else None
+    if sun_lamp:
+        print("sun lamp: %s" % (lamp or "none (no compact sun in %s)" % world), flush=True)
+    masks = demo_scene.region_masks(scene, info["ground"], info["far_spheres"])
+    path = os.path.join(out, "render.exr")
+    reference = demo_scene.render(scene, "CYCLES", path, reference_samples, seed=1)
+    rows = []
+
+    def measure(name):
+        fast = [demo_scene.render(scene, "CYCLES", path, 16, seed=s) for s in SEEDS]
+        converged = demo_scene.render(scene, "CYCLES", path, converged_samples, seed=7)
+        for region in REGIONS:
+            m = masks[region]
+            row = {"variant": name, "region": region,
+                   "rmse16": float(np.mean([image_error.pixel_rmse(i, reference, m) for i in fast])),
+                   "noise": float(np.mean([image_error.pixel_rmse(i, converged, m) for i in fast])),
+                   "bias": image_error.pixel_rmse(converged, reference, m),
+                   "block": float(np.mean([image_error.block_error(i, reference, m) for i in fast])),
+                   "block_converged": image_error.block_error(converged, reference, m),
+                   "mean": image_error.mean_luminance(converged, m),
+                   "reference_mean": image_error.mean_luminance(reference, m)}
+            rows.append(row)
+            print("%-14s %-12s rmse16 %.4f noise %.4f bias %.4f block %.4f (converged %.4f) mean %.4f "
+                  "(reference %.4f)" % (name, region, row["rmse16"], row["noise"], row["bias"], row["block"],
+                                        row["block_converged"], row["mean"], row["reference_mean"]), flush=True)
+
+    measure("naive")
+    for outcome in demo_scene.bake_all(scene):
+        if "error" in outcome:
+            raise RuntimeError("bake of %s failed: %s" % (outcome["material"], outcome["message"]))
+    for variant in variants:
+        undo = use_variant(variant)
+        measure(variant)
+        undo()
+    for row in rows:
+        if row["variant"] != "naive":
+            naive = next(r for r in rows if r["variant"] == "naive" and r["region"] == row["region"])
+            row["ratio_rmse16"] = image_error.ratio(row["rmse16"], naive["rmse16"])
+            print("%-14s %-12s rmse16 ratio to naive %.3f" % (row["variant"], row["region"], row["ratio_rmse16"]))
+    with open(os.path.join(out, "study.json"), "w") as f:
+        json.dump({"world": world, "sun_lamp": lamp, "reference_samples": reference_samples, "rows": rows}, f, indent=1)
+
+
+def main():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    parser = argparse.ArgumentParser(prog="cycles_noise_study.py")
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--world", default="sunset")
+    parser.add_argument("--sun-lamp", action="store_true")
+    parser.add_argument("--reference-samples", type=int, default=512)
+    parser.add_argument("--converged-samples", type=int, default=256)
+    parser.add_argument("--variants", default="widened,narrowed,narrowed-ggx")
+    parser.add_argument("--width", type=int, default=128)
+    parser.add_argument("--height", type=int, default=72)
+    parser.add_argument("--library")
+    args = parser.parse_args(argv)
+    variants = [v for v in args.variants.split(",") if v]
+    unknown = [v for v in variants if v not in ("widened", "narrowed", "widened-ggx", "narrowed-ggx")]
+    if unknown:
+        parser.error("unknown variants: %s" % ", ".join(unknown))
+    os.makedirs(args.out, exist_ok=True)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    demo_scene.import_addon(args.library)
+    study(os.path.abspath(args.out), args.world, args.sun_lamp, args.reference_samples, args.converged_samples,
+          variants, args.width, args.height)
+
+
+if __name__ == "__main__":
+    main()
