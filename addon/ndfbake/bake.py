@@ -337,11 +337,13 @@ def _relative(path):
 def _free_name(collection, wanted, own=None):
     """`wanted`, or wanted.001, .002… where taken (by another ID than `own`): Blender 3.4 gives an
     ID renamed to a taken name that name and renames the ID that had it, which must not happen to
-    a previous bake's."""
-    name, k = wanted, 0
+    a previous bake's. Cut as Blender cuts ID names (63 bytes), or a long name would be taken
+    after all."""
+    name, k = nodes.cut_name(wanted), 0
     while name in collection and collection[name] != own:
         k += 1
-        name = "%s.%03d" % (wanted, k)
+        suffix = ".%03d" % k
+        name = nodes.cut_name(wanted, nodes.ID_NAME_BYTES - len(suffix)) + suffix
     return name
 
 
@@ -551,12 +553,10 @@ def _take_names(material, targets, images):
         group = bpy.data.node_groups.get(target["node_group"])
         if group is None:
             continue
-        previous = group.name
         group.name = _free_name(bpy.data.node_groups, "NDFB " + material.name, group)
-        for node in group.nodes:  # its atlas table, named after it
-            table = node.node_tree if node.bl_idname == "ShaderNodeGroup" else None
-            if table is not None and table.get(nodes.TAG) is not None and table.name == previous + " atlas":
-                table.name = _free_name(bpy.data.node_groups, group.name + " atlas", table)
+        table = nodes.atlas_table(group)  # named after it
+        if table is not None:
+            table.name = _free_name(bpy.data.node_groups, nodes.atlas_table_name(group.name), table)
         target["node_group"] = group.name
 
 

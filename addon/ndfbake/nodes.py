@@ -62,6 +62,8 @@ BILINEAR_GROUP = "NDFB Bilinear v%d" % GROUP_VERSION
 LOD_INPUTS = ("Texels per Unit", "Pixel Angle", "Pixel Size")
 EEVEE_BSDF = "EEVEE BSDF"             # the group's second shader output (narrowed lobes)
 TAP_CORNERS = ("00", "10", "01", "11")  # x then y offset of a bilinear tap
+ATLAS_LOOKUP = "Atlas Level %d"       # the material group's atlas-table nodes (0: low, 1: high level)
+ID_NAME_BYTES = 63                    # Blender cuts the names of data-blocks to 63 bytes
 GGX_VMF_WIDENING = 1.5                # native/src/math/brdf.h kGgxVmfWidening
 HALF_INV_KAPPA_RESOLUTION = 4e-4      # native/src/io/lobe_exr.h kHalfInvKappaResolution (the add-on
                                       # writes half floats)
@@ -365,6 +367,23 @@ def bilinear_group():
     return tree
 
 
+def cut_name(name, size=ID_NAME_BYTES):
+    """`name` cut to `size` bytes of UTF-8 (whole characters), as Blender cuts ID names."""
+    return name.encode("utf-8")[:size].decode("utf-8", errors="ignore")
+
+
+def atlas_table_name(group_name):
+    """'<group> atlas', the group's name cut so that " atlas" fits in an ID name."""
+    return cut_name(group_name, ID_NAME_BYTES - len(" atlas")) + " atlas"
+
+
+def atlas_table(group_tree):
+    """The atlas table (atlas_table_group) a material group looks its levels up in, or None (level
+    0): found through the group's lookup nodes, not by name (the material's name may be long)."""
+    lookup = group_tree.nodes.get(ATLAS_LOOKUP % 0)
+    return lookup.node_tree if lookup is not None and lookup.bl_idname == "ShaderNodeGroup" else None
+
+
 def atlas_table_group(name, atlas):
     """Level → the level's frame X, Y and size W, H in the atlas: a step sum over the levels,
     Σ_k [Level ≥ k]·(v_k − v_(k−1)), exact for integer levels."""
@@ -450,10 +469,11 @@ def _atlas_levels(tree, gin, name, atlas, repeat, uv):
     high = _math(tree, "MINIMUM", _math(tree, "ADD", low, 1.0, location=(-1700, 500)), float(len(atlas.levels) - 1),
                  location=(-1550, 500))
     blend = _math(tree, "SUBTRACT", level, low, location=(-1700, 300))
-    table = atlas_table_group(name + " atlas", atlas)
+    table = atlas_table_group(atlas_table_name(name), atlas)
     taps = []
     for k, index in enumerate((low, high)):
         lookup = tree.nodes.new("ShaderNodeGroup")
+        lookup.name = lookup.label = ATLAS_LOOKUP % k
         lookup.node_tree = table
         lookup.location = (-1550, 300 - 250 * k)
         tree.links.new(index, lookup.inputs["Level"])

@@ -13,12 +13,15 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
   own bilinear (Linear) lookup of the level's file renders, with repeat across tile borders.
 - A bake with a camera writes only the levels the camera reaches, and one atlas per lobe; the
   group's pixel angle follows the lens and the resolution through drivers; revert removes them.
+- A material name near Blender's 63-byte limit: revert removes its atlas table, and re-bakes give
+  its group and atlas table the first bake's names, with no stale table left.
 - A Mapping node that tiles the texture 4x (Point) or 2x (Texture type, scale 0.5) multiplies the
   texel density by 4 (2), a muted one by 1, and so does a muted link from it into the texture (the
   group then gets no Vector input); a UV Map node reading a UV map tiled 4x gives 4x; coordinates
   from elsewhere (Object), a muted link into the Mapping, or a rotation out of the UV plane leave
   level 0 to the renderer.
 """
+import json
 import math
 import os
 import sys
@@ -297,6 +300,38 @@ def test_revert_removes_the_atlas_table_of_a_long_material_name():
         h.expect(not leftovers, "revert left node groups: %s" % leftovers)
 
 
+def test_a_rebake_of_a_long_material_name_names_its_atlas_table():
+    """A re-bake's node group and atlas table take the names a first bake gives them, however long
+    the material's name: Blender cuts ID names at 63 bytes, so "<group> atlas" cannot be how the
+    table is found, and its name keeps " atlas" within those 63 bytes (renaming it to the group's
+    cut name would rename the group: Blender 3.4 gives a taken name to the ID renamed)."""
+    from ndfbake import bake
+    with h.scratch_dir() as directory:
+        name = "M" * 60
+        material = h.baked_scene(directory, size=32, material_name=name)
+        _camera(location=(0.0, 0.0, 6.0), lens=50.0)
+        group_name = ("NDFB " + name)[:63]
+        table_name = ("NDFB " + name)[:63 - len(" atlas")] + " atlas"
+        for bake_number in (1, 2, 3):
+            result = bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+            h.expect("level of detail from the camera" in result.summary, result.summary)
+            group = material.node_tree.nodes["ndfbake"].node_tree
+            tables = {n.node_tree.name for n in group.nodes
+                      if n.bl_idname == "ShaderNodeGroup" and n.node_tree.name.startswith("NDFB M")}
+            material_groups = sorted(g.name for g in bpy.data.node_groups if g.name.startswith("NDFB M"))
+            print("  bake %d: group %r, table %s" % (bake_number, group.name, sorted(tables)))
+            h.expect(group.name == group_name, "bake %d: group %r, expected %r" % (bake_number, group.name, group_name))
+            h.expect(tables == {table_name}, "bake %d: atlas tables %s, expected %r"
+                     % (bake_number, tables, table_name))
+            h.expect(material_groups == sorted([group_name, table_name]),
+                     "bake %d: stale or duplicate groups: %s" % (bake_number, material_groups))
+            h.expect(json.loads(material[bake.RECORD_KEY])["targets"][0]["node_group"] == group_name,
+                     "bake %d: the record names another group" % bake_number)
+        bake.revert(material)
+        leftovers = [g.name for g in bpy.data.node_groups]
+        h.expect(not leftovers, "revert left node groups: %s" % leftovers)
+
+
 def test_a_mapping_node_scales_the_texel_density():
     from ndfbake import bake
     with h.scratch_dir() as directory:
@@ -403,5 +438,6 @@ if __name__ == "__main__":
            test_atlas_lookups_equal_bilinear_filtering_of_the_level_files,
            test_a_bake_with_a_camera_writes_only_the_levels_it_reaches,
            test_revert_removes_the_atlas_table_of_a_long_material_name,
+           test_a_rebake_of_a_long_material_name_names_its_atlas_table,
            test_a_mapping_node_scales_the_texel_density,
            test_texel_density_counts_only_the_material_faces_and_the_render_uv_map])
