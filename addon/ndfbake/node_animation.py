@@ -211,10 +211,10 @@ def _move_drivers(animation, paths, move):
             animation.drivers.remove(fcurve)
 
 
-def remove_node_animation(material_tree, node_name):
+def remove_node_animation(material_tree, node_name, clear_empty=True):
     """Drops the drivers and keyframes of the named node's inputs (but the keyframes of an action
-    that animates a node of that name in another tree); and the tree's animation data when nothing
-    is left in it."""
+    that animates a node of that name in another tree); and, with clear_empty, the tree's animation
+    data when nothing is left in it."""
     animation = material_tree.animation_data
     if animation is None:
         return
@@ -225,7 +225,7 @@ def remove_node_animation(material_tree, node_name):
         if action.library is None and not animates_elsewhere(action, material_tree, node_name):
             for fcurve in [f for f in action.fcurves if f.data_path.startswith(prefix)]:
                 action.fcurves.remove(fcurve)
-    if not animation.drivers and animation.action is None and not animation.nla_tracks:
+    if clear_empty and not animation.drivers and animation.action is None and not animation.nla_tracks:
         material_tree.animation_data_clear()
 
 

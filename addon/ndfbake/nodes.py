@@ -862,14 +862,7 @@ def undo_replacement(material_tree, replacement):
         elif material_scan.ROLE_KEY in marked.keys():
             del marked[material_scan.ROLE_KEY]
     if node is not None:
-        animation = material_tree.animation_data
-        if animation is not None:
-            prefix = node_animation.node_prefix(node.name)
-            for fcurve in [f for f in animation.drivers if f.data_path.startswith(prefix)]:
-                animation.drivers.remove(fcurve)
-            if not replacement.had_animation and not animation.drivers and animation.action is None \
-                    and not animation.nla_tracks:
-                material_tree.animation_data_clear()
+        node_animation.remove_node_animation(material_tree, node.name, clear_empty=not replacement.had_animation)
         nodes.remove(node)
 
 
