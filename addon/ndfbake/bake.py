@@ -480,13 +480,11 @@ def finish(job):
                             "principled_settings": nodes.principled_settings(principled)})
             if principled_name in replacing:
                 old_target, old_node = replacing[principled_name]
-                replacement = nodes.replace_group_node(tree, group, principled, normal_map, texture, old_node)
-                replacements.append((targets[-1], old_target, replacement))
+                replacement = nodes.replace_group_node(tree, group, principled, normal_map, texture, old_node,
+                                                       old_target.get("eevee_output", ""))
+                replacements.append((targets[-1], replacement))
                 node = tree.nodes[replacement.node]
-                eevee = old_target.get("eevee_output", "")
-                eevee = material_scan.recorded_node(tree, eevee, material_scan.node_role(
-                    "eevee_output", old_target.get("group_node", ""))) if eevee else None
-                targets[-1].update(bypassed=replacement.bypassed, eevee_output=eevee.name if eevee else "")
+                targets[-1].update(bypassed=replacement.bypassed, eevee_output=replacement.eevee_output)
             else:
                 node, bypassed, eevee_output = nodes.insert_group_node(tree, group, principled, normal_map, texture)
                 inserted.append(targets[-1])
@@ -496,7 +494,7 @@ def finish(job):
     except Exception as e:
         # A bug, not bad input: take away what this bake added (its nodes, node groups, images and
         # files), so that the material is as it was before it, a previous bake included; say so.
-        for _, _, replacement in reversed(replacements):
+        for _, replacement in reversed(replacements):
             nodes.undo_replacement(tree, replacement)
         _remove_nodes(material, {"targets": inserted}, keep_edits=False)
         nodes.remove_unused_groups([name for name in bpy.data.node_groups.keys() if name not in groups_before])
@@ -507,11 +505,8 @@ def finish(job):
 
     # Everything is built: the previous bake's nodes, node groups and images go (its files stay for
     # Ctrl-Z: lobe_folders.py), and the new ones take their names.
-    for target, _, replacement in replacements:
+    for target, replacement in replacements:
         target["group_node"] = nodes.commit_replacement(tree, replacement).name
-        eevee = tree.nodes.get(target["eevee_output"]) if target["eevee_output"] else None
-        if eevee is not None:  # (a record older than roles gave it none)
-            eevee[material_scan.ROLE_KEY] = material_scan.node_role("eevee_output", target["group_node"])
     baked = {principled_name for principled_name, _, _ in job.targets}  # each replaced above
     _remove_nodes(material, {"targets": [t for name, (t, _) in replacing.items() if name not in baked]})
     nodes.remove_unused_groups([group.name for group in old_groups])

@@ -808,6 +808,7 @@ class Replacement:
     principled: str
     roles: dict                   # {node name: its ROLE_KEY value before (None: none)}
     had_animation: bool           # whether the tree had animation data before
+    eevee_output: str             # old's EEVEE output (add_eevee_output), which the new node takes over; ""
     # The links moved off old's shader outputs: (output name, to_node name, to_socket identifier, muted).
     moved: list = field(default_factory=list)
 
@@ -817,16 +818,22 @@ class Replacement:
         return [(to_node, identifier, muted) for name, to_node, identifier, muted in self.moved if name == "BSDF"]
 
 
-def replace_group_node(material_tree, group_tree, principled, normal_map, image_texture, old):
+def replace_group_node(material_tree, group_tree, principled, normal_map, image_texture, old, eevee_output=""):
     """For a re-bake: adds the new group node in the place of `old`, the group node of the bake it
     replaces, with old's inputs (the Principled's inputs as the user edits them now: held_input),
     and moves onto it the links leaving old's shader outputs (the EEVEE output's too). Old stays
     in the tree, untouched otherwise, until commit_replacement; undo_replacement puts the material
     back exactly as it was (as on any error here). Keyframes and drivers of old's inputs, which go
-    by node name, move at the commit. Returns a Replacement."""
+    by node name, move at the commit, and so does the role of old's EEVEE output, which the bake
+    record calls `eevee_output` (found by its role: material_scan.recorded_node). Returns a
+    Replacement."""
+    key = str(old.get(material_scan.ROLE_KEY, "")).partition(":")[2] or old.name  # (a record older than roles)
+    eevee = material_scan.recorded_node(material_tree, eevee_output, material_scan.node_role("eevee_output", key)) \
+        if eevee_output else None
     replacement = Replacement(node="", old=old.name, principled=principled.name,
                               roles={n.name: n.get(material_scan.ROLE_KEY) for n in (principled, normal_map)},
-                              had_animation=material_tree.animation_data is not None)
+                              had_animation=material_tree.animation_data is not None,
+                              eevee_output=eevee.name if eevee else "")
     node = material_tree.nodes.new("ShaderNodeGroup")
     node.name = REBAKE_NAME
     replacement.node = node.name
@@ -870,8 +877,8 @@ def commit_replacement(material_tree, replacement):
     """Puts a re-bake's group node in the place of the old one for good: the keyframes and drivers
     of old's inputs move to it (and the Principled's, as a first bake copies them, for inputs old
     did not carry), old goes, and the new node takes the name a bake gives its node, the roles'
-    key with it (Blender renames the animation paths and driver variables that name it). Returns
-    the node."""
+    key with it (Blender renames the animation paths and driver variables that name it), old's
+    EEVEE output's too. Returns the node."""
     nodes = material_tree.nodes
     node, old, principled = nodes[replacement.node], nodes[replacement.old], nodes[replacement.principled]
     old_key = str(old.get(material_scan.ROLE_KEY, "")).partition(":")[2]
@@ -897,6 +904,8 @@ def commit_replacement(material_tree, replacement):
         role, _, key = str(marked.get(material_scan.ROLE_KEY, "")).partition(":")
         if key and key in (new_key, old_key):
             marked[material_scan.ROLE_KEY] = material_scan.node_role(role, node.name)
+    if replacement.eevee_output:  # (a record older than roles gave it none)
+        nodes[replacement.eevee_output][material_scan.ROLE_KEY] = material_scan.node_role("eevee_output", node.name)
     return node
 
 
