@@ -34,8 +34,8 @@ void texel_reference_samples(const NormalMap& map, WrapMode wrap, int level, int
 LevelStats measure_level(const LobePyramid& pyramid, int level, const BaseBrdf& brdf, int max_texels,
                          int sample_cap, bool measure_alignment)
 {
-    const TexelFitSettings fit =
-        level_fit_settings(pyramid.settings, pyramid.source.width, pyramid.source.height, level);
+    const TexelFitSettings fit = level_fit_settings(
+        pyramid.settings, level, largest_footprint(pyramid.source.width, pyramid.source.height, level));
     LevelStats stats;
     stats.level = level;
     stats.size = pyramid.size(level);

@@ -50,12 +50,11 @@ std::vector<VmfLobe> LobePyramid::texel_lobes(int level, int x, int y) const
 
 int LobePyramid::lobe_count(int level, int x, int y) const { return int(texel_lobes(level, x, y).size()); }
 
-TexelFitSettings level_fit_settings(const PyramidSettings& settings, int width, int height, int level)
+TexelFitSettings level_fit_settings(const PyramidSettings& settings, int level, uint64_t footprint)
 {
     TexelFitSettings fit = settings.fit;
     if (settings.method != FitMethod::hierarchical || level < 1) return fit;
     if (binned_level(level)) fit.em.max_iterations = std::min(fit.em.max_iterations, kBinnedIterations);
-    const uint64_t footprint = largest_footprint(width, height, level);
     if (!settings.refine && footprint <= kOneStartFootprint) {
         fit.two_starts = false;
         const bool kmeans = footprint <= kKmeansFootprint;
@@ -120,9 +119,10 @@ LobePyramid build_lobe_pyramid(const NormalMap& map, const PyramidSettings& sett
         const LobeLevel& finer = pyramid.levels[size_t(l - 1)];
         const bool binned = hierarchical && binned_level(l);
         bins = binned ? BinnedLevel(level.size) : BinnedLevel();
-        const TexelFitSettings fit_settings = level_fit_settings(settings, map.width, map.height, l);
+        const uint64_t footprint = largest_footprint(map.width, map.height, l);
+        const TexelFitSettings fit_settings = level_fit_settings(settings, l, footprint);
         // EM seeds from the children's lobes only where a texel has more samples than lobes.
-        const bool seeded = largest_footprint(map.width, map.height, l) > uint64_t(slots);
+        const bool seeded = footprint > uint64_t(slots);
         // Texels of no more fine normals than slots (level 1 at 4 lobes) hold them exactly: no
         // seeds, no EM, no refinement; without a budget nothing is scored either. (Never a binned
         // level, whose texels cover more normals than kMaxLobes: their bins are kept below.)

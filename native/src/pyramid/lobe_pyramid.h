@@ -81,9 +81,10 @@ struct PyramidSettings {
     int max_levels = 0;
 };
 
-// What build_lobe_pyramid fits the texels of `level` of a width × height map with: settings.fit,
-// with the hierarchical fit's iteration caps and shortcuts for that level's footprint.
-TexelFitSettings level_fit_settings(const PyramidSettings& settings, int width, int height, int level);
+// What build_lobe_pyramid fits the texels of `level` with: settings.fit, with the hierarchical
+// fit's iteration caps and shortcuts for the level's footprint (largest_footprint(w, h, level),
+// which build_lobe_pyramid also seeds EM by).
+TexelFitSettings level_fit_settings(const PyramidSettings& settings, int level, uint64_t footprint);
 
 // The levels a pyramid of a width × height map has under `settings`.
 int pyramid_level_count(int width, int height, const PyramidSettings& settings);
