@@ -2,8 +2,8 @@
 (bake.py, the same code the Bake button runs).
 
     blender -b scene.blend --python examples/bake_blend.py -- [--material NAME ...]
-            [--max-lobes N] [--tolerance T] [--refine] [--level-of-detail scene|renderer] [--pack] [--revert]
-            [--no-save | --delete-unused]
+            [--max-lobes N] [--tolerance T] [--refine] [--level-of-detail scene|renderer]
+            [--cycles-lobes widened|narrowed] [--pack] [--revert] [--no-save | --delete-unused]
 
 Without --material it bakes every material the scene needs: those with a tangent-space normal
 map (Image Texture -> Normal Map -> Principled BSDF) on objects the scene renders. Each material's
@@ -79,6 +79,10 @@ def _arguments():
                         help="scene (default): the node group picks a level per pixel from the scene camera and "
                              "only the levels the cameras reach are baked; renderer: level 0, filtered by the "
                              "renderer (EEVEE's own MIP levels)")
+    parser.add_argument("--cycles-lobes", choices=("widened", "narrowed"), default="widened",
+                        help="what Cycles draws: widened (default) lobes, the fewest fireflies at low sample "
+                             "counts, or the lobes EEVEE draws, narrowed toward grazing views: closer to the "
+                             "filtered look once converged")
     parser.add_argument("--pack", action="store_true", help="also pack the lobe textures into the .blend")
     parser.add_argument("--revert", action="store_true", help="undo earlier bakes instead of baking")
     saving = parser.add_mutually_exclusive_group()
@@ -133,7 +137,8 @@ def main():
         return _delete_unused(addon.lobe_folders) if args.delete_unused else 0
 
     settings = bake.BakeSettings(max_lobes=args.max_lobes, tolerance=args.tolerance, refine=args.refine,
-                                 pack=args.pack, level_of_detail=args.level_of_detail.upper())
+                                 pack=args.pack, level_of_detail=args.level_of_detail.upper(),
+                                 cycles_lobes=args.cycles_lobes.upper())
     start = time.perf_counter()
     failures = 0
     changed = 0

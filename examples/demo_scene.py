@@ -494,10 +494,10 @@ def montage(rows, path, scene=None, gap=4):
 
 # ---- the demo -------------------------------------------------------------------------------------
 
-def bake_all(scene, max_lobes=MAX_LOBES):
+def bake_all(scene, max_lobes=MAX_LOBES, cycles_lobes="WIDENED"):
     from ndfbake import bake
-    outcomes = bake.bake_materials(bake.materials_needing_bake(scene),
-                                   settings_for=lambda m: bake.BakeSettings(max_lobes=max_lobes))
+    settings = bake.BakeSettings(max_lobes=max_lobes, cycles_lobes=cycles_lobes)
+    outcomes = bake.bake_materials(bake.materials_needing_bake(scene), settings_for=lambda m: settings)
     summary = []
     for name, outcome in outcomes:
         if isinstance(outcome, bake.BakeError):

@@ -31,6 +31,11 @@ Files (choices the design leaves open):
   the nodes do not tie to one UV map (scene_lod.texture_uv) gets "RENDERER", and the summary
   says why.
   README gives the measurement behind the default.
+- Cycles lobes (BakeSettings.cycles_lobes): EEVEE always draws the lobes narrowed at grazing
+  views; Cycles draws the widened ones (WIDENED, default: the fewest fireflies at low sample
+  counts under a small bright light such as an HDR's sun) or the same narrowed ones (NARROWED:
+  closer to the filtered reference once converged). nodes.py and README ("Open problems") say
+  what was measured.
 """
 import json
 import os
@@ -58,6 +63,7 @@ class BakeSettings:
     threads: int = 0            # 0: every core
     pack: bool = False          # also pack the lobe textures into the .blend
     level_of_detail: str = "SCENE"  # "SCENE": atlases at a level from the camera; "RENDERER": level 0
+    cycles_lobes: str = nodes.WIDENED  # what Cycles draws: WIDENED lobes or the NARROWED ones EEVEE draws
 
 
 class BakeError(Exception):
@@ -93,7 +99,7 @@ def settings_from_material(material):
     if props is None:
         return BakeSettings()
     return BakeSettings(max_lobes=props.max_lobes, tolerance=props.tolerance, refine=props.refine,
-                        pack=props.pack, level_of_detail=props.level_of_detail)
+                        pack=props.pack, level_of_detail=props.level_of_detail, cycles_lobes=props.cycles_lobes)
 
 
 # ---- step 1: prepare ------------------------------------------------------------------------------
@@ -146,6 +152,9 @@ def prepare(material, settings=None):
         raise BakeError("BAD_SETTINGS", "tolerance must be in [0, 1], got %g" % settings.tolerance)
     if settings.level_of_detail not in ("SCENE", "RENDERER"):
         raise BakeError("BAD_SETTINGS", "level of detail must be SCENE or RENDERER, got %r" % settings.level_of_detail)
+    if settings.cycles_lobes not in (nodes.WIDENED, nodes.NARROWED):
+        raise BakeError("BAD_SETTINGS", "Cycles lobes must be %s or %s, got %r" % (nodes.WIDENED, nodes.NARROWED,
+                                                                                  settings.cycles_lobes))
     lod, lod_note = _plan_lod(material, scan, settings)
     # Reserved last: nothing after it can fail, so no failed prepare keeps a folder name.
     try:
@@ -470,7 +479,8 @@ def finish(job):
             current = replacing.get(principled_name, (None, None))[1]
             groups.append(nodes.build_material_group(
                 "NDFB " + material.name, tree.nodes[principled_name], tree.nodes[normal_map_name],
-                tree.nodes[texture_name], images, atlas, job.lod, current=current))
+                tree.nodes[texture_name], images, atlas, job.lod, current=current,
+                cycles_lobes=job.settings.cycles_lobes))
         for (principled_name, normal_map_name, texture_name), group in zip(job.targets, groups):
             principled = tree.nodes[principled_name]
             normal_map = tree.nodes[normal_map_name]
@@ -520,6 +530,8 @@ def finish(job):
             job.lod.texels_per_unit, job.lod.footprint_max)
     else:
         summary += "; level 0 filtered by the renderer" + (" (%s)" % job.lod_note if job.lod_note else "")
+    if job.settings.cycles_lobes == nodes.NARROWED:
+        summary += "; Cycles draws the lobes narrowed at grazing views"
     rec = {
         "version": RECORD_VERSION,
         "folder": job.folder,
@@ -529,7 +541,8 @@ def finish(job):
         "packed": bool(job.settings.pack),
         "summary": summary,
         "settings": {"max_lobes": job.settings.max_lobes, "tolerance": job.settings.tolerance,
-                     "refine": job.settings.refine, "roughness": job.roughness, "level_of_detail": "SCENE" if job.lod else "RENDERER"},
+                     "refine": job.settings.refine, "roughness": job.roughness, "level_of_detail": "SCENE" if job.lod else "RENDERER",
+                     "cycles_lobes": job.settings.cycles_lobes},
     }
     material[RECORD_KEY] = json.dumps(rec)
     return BakeResult(material=material.name, folder=job.folder, lobes=len(images), seconds=job.seconds,

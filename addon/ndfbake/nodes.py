@@ -41,7 +41,10 @@ gets a one-lobe group (no mix chain): the group is built for the lobe slots the 
 The group has two shader outputs: BSDF, the lobes above (Cycles, and both engines where the
 material's graph is the user's), and EEVEE BSDF, the same lobes narrowed toward grazing views
 (grazing_roughness_group), which EEVEE draws through a Material Output of target EEVEE that the
-bake adds beside the user's (add_eevee_output) and Revert removes.
+bake adds beside the user's (add_eevee_output) and Revert removes. With cycles_lobes NARROWED
+the group is built with the narrowed lobes only and both outputs draw them: closer to the
+filtered reference in a converged Cycles render, noisier at low sample counts where a small
+bright light (an HDR's sun) glints in them (README, "Open problems": image error in Cycles).
 
 OSL: Debian's Blender is built without OSL (bpy.app.build_options.cycles_osl is False), so no OSL
 Script variant is offered; `osl_status()` says so. The stock-node group works in both engines.
@@ -61,6 +64,8 @@ TAPS_GROUP = "NDFB Atlas Taps v%d" % GROUP_VERSION
 BILINEAR_GROUP = "NDFB Bilinear v%d" % GROUP_VERSION
 LOD_INPUTS = ("Texels per Unit", "Pixel Angle", "Pixel Size")
 EEVEE_BSDF = "EEVEE BSDF"             # the group's second shader output (narrowed lobes)
+# BakeSettings.cycles_lobes: what the group's BSDF output (Cycles' view) draws.
+WIDENED, NARROWED = "WIDENED", "NARROWED"
 TAP_CORNERS = ("00", "10", "01", "11")  # x then y offset of a bilinear tap
 ATLAS_LOOKUP = "Atlas Level %d"       # the material group's atlas-table nodes (0: low, 1: high level)
 ID_NAME_BYTES = 63                    # Blender cuts the names of data-blocks to 63 bytes
@@ -533,13 +538,15 @@ def _sample_level0(tree, gin, image, image_texture, has_vector, j, y):
 
 
 def build_material_group(name, principled, normal_map, image_texture, lobe_images, atlas=None, lod=None,
-                         current=None):
+                         current=None, cycles_lobes=WIDENED):
     """A group with the carried Principled inputs (+ Normal Strength, + Vector if the original
-    texture's has a live (unmuted) link, + the level-of-detail constants with an atlas) and one
-    BSDF output, shading through len(lobe_images) lobes: level-0 textures that the renderer
-    filters itself (atlas None), or MIP atlases (AtlasLayout) sampled at the level of detail the
-    scene gives (lod: a scene_lod.LodPlan, required with an atlas). For a re-bake, `current` is
-    the group node of the bake it replaces, which holds the Principled's inputs (held_input)."""
+    texture's has a live (unmuted) link, + the level-of-detail constants with an atlas) and the
+    BSDF and EEVEE BSDF outputs, shading through len(lobe_images) lobes: level-0 textures that
+    the renderer filters itself (atlas None), or MIP atlases (AtlasLayout) sampled at the level
+    of detail the scene gives (lod: a scene_lod.LodPlan, required with an atlas). BSDF draws the
+    widened lobes, or with cycles_lobes NARROWED the narrowed ones EEVEE BSDF draws. For a
+    re-bake, `current` is the group node of the bake it replaces, which holds the Principled's
+    inputs (held_input)."""
     tree = _new_group(name)
     decode = lobe_group()
     carried = carried_inputs(principled, current)
@@ -612,16 +619,18 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
             grazing.inputs["Base Roughness"].default_value = dec.inputs["Roughness"].default_value
         tree.links.new(nm.outputs["Normal"], grazing.inputs["Normal"])
 
-        for output, roughness, dy in (("BSDF", dec.outputs["Roughness"], 0),
-                                      (EEVEE_BSDF, grazing.outputs["Roughness"], -450)):
+        widened = [("BSDF", dec.outputs["Roughness"], 0)] if cycles_lobes == WIDENED else []
+        for output, roughness, dy in widened + [(EEVEE_BSDF, grazing.outputs["Roughness"], -450)]:
             bsdf = _lobe_bsdf(tree, gin, principled, carried, roughness, nm.outputs["Normal"],
                               "Lobe %d %s" % (j, output), (0, y + dy), multiscatter)
             shaders[output].append(bsdf.outputs["BSDF"])
         weights.append(dec.outputs["Weight"])
 
     factors = _mix_factors(tree, weights)
-    for output, y in (("BSDF", -200), (EEVEE_BSDF, -500)):
-        tree.links.new(_mix_chain(tree, shaders[output], factors, y), gout.inputs[output])
+    narrowed = _mix_chain(tree, shaders[EEVEE_BSDF], factors, -500)
+    tree.links.new(narrowed, gout.inputs[EEVEE_BSDF])
+    tree.links.new(_mix_chain(tree, shaders["BSDF"], factors, -200) if cycles_lobes == WIDENED else narrowed,
+                   gout.inputs["BSDF"])
     return tree
 
 

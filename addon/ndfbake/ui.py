@@ -25,6 +25,13 @@ class NDFBakeSettings(bpy.types.PropertyGroup):
                 "the cameras reach)"),
                ("RENDERER", "Renderer", "Sample level 0 and leave filtering to the renderer (EEVEE MIP-maps it; "
                 "Cycles does not)")))
+    cycles_lobes: EnumProperty(
+        name="Cycles Lobes", default=nodes.WIDENED,
+        items=((nodes.WIDENED, "Widened", "Cycles draws each lobe widened by its spread: the fewest fireflies at "
+                "low sample counts under a small bright light (an HDR's sun), darker than the filtered look at "
+                "grazing views"),
+               (nodes.NARROWED, "Narrowed", "Cycles draws the lobes EEVEE draws, narrowed toward grazing views: "
+                "closer to the filtered look once converged (film sample counts), noisier at low ones")))
 
 
 def _wrapped(layout, text, icon="NONE", width=60):
@@ -83,6 +90,7 @@ class NDFBAKE_PT_material(bpy.types.Panel):
         column.prop(settings, "tolerance")
         column.prop(settings, "refine")
         column.prop(settings, "level_of_detail")
+        column.prop(settings, "cycles_lobes")
         column.prop(settings, "pack")
 
         baked = bake.is_baked(material)

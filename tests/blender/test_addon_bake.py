@@ -172,6 +172,57 @@ def test_operators_rebake_fewer_lobes_and_revert():
         h.expect("has no ndfbake bake" in str(e), str(e))
 
 
+def _lobe_roughness_sources(tree, output):
+    """The node each lobe BSDF feeding the group's `output` takes its Roughness from, by lobe."""
+    found, stack = {}, [tree.nodes["Group Output"].inputs[output].links[0].from_node]
+    while stack:
+        node = stack.pop()
+        if node.bl_idname == "ShaderNodeMixShader":
+            stack += [link.from_node for socket in node.inputs[1:] for link in socket.links]
+        else:
+            found[node.name] = node.inputs["Roughness"].links[0].from_node.name
+    return found
+
+
+def test_cycles_lobes_narrowed_draws_the_eevee_lobes_everywhere():
+    """Cycles Lobes: Narrowed builds the narrowed lobes only and both outputs draw them (Cycles
+    through the user's output, EEVEE through its own); a re-bake with Widened puts the widened
+    lobes back on the BSDF output; bad values are refused."""
+    from ndfbake import bake, nodes
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory)
+        before = h.dump_material(material)
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=4, cycles_lobes=nodes.NARROWED))
+        h.expect("Cycles draws the lobes narrowed at grazing views" in result.summary, result.summary)
+        h.expect(_record(material)["settings"]["cycles_lobes"] == nodes.NARROWED, "record: %s" % _record(material))
+        group_node = material.node_tree.nodes["ndfbake"]
+        tree = group_node.node_tree
+        cycles, eevee = (_lobe_roughness_sources(tree, output) for output in ("BSDF", nodes.EEVEE_BSDF))
+        h.expect(cycles == eevee and len(cycles) == result.lobes == _principled_count(tree, nodes.EEVEE_BSDF),
+                 "Cycles' lobes %s, EEVEE's %s, %d lobes" % (cycles, eevee, result.lobes))
+        h.expect(_principled_count(tree) == 0, "widened lobes built that nothing draws")
+        h.expect(all(tree.nodes[source].node_tree == nodes.grazing_roughness_group() for source in cycles.values()),
+                 "a lobe's roughness is not the grazing group's: %s" % cycles)
+        h.expect(material.node_tree.get_output_node("CYCLES").inputs["Surface"].links[0].from_node == group_node,
+                 "Cycles does not draw the group")
+
+        bake.bake_material(material, bake.BakeSettings(max_lobes=4))
+        tree = material.node_tree.nodes["ndfbake"].node_tree
+        cycles, eevee = (_lobe_roughness_sources(tree, output) for output in ("BSDF", nodes.EEVEE_BSDF))
+        h.expect(len(cycles) == len(eevee) == _principled_count(tree) and not set(cycles) & set(eevee),
+                 "after a Widened re-bake: Cycles' lobes %s, EEVEE's %s" % (cycles, eevee))
+        h.expect(all(source.startswith("Decode") for source in cycles.values()),
+                 "Cycles' lobes do not take the decoded (widened) roughness: %s" % cycles)
+        h.expect(_record(material)["settings"]["cycles_lobes"] == nodes.WIDENED, "record after the re-bake")
+
+        bake.revert(material)
+        h.expect(h.dump_material(material) == before, "material differs after revert")
+        e = h.raised(bake.BakeError, lambda: bake.bake_material(material, bake.BakeSettings(cycles_lobes="SHARP")),
+                     "an unknown Cycles Lobes value must be refused")
+        h.expect(e.code == "BAD_SETTINGS" and "SHARP" in e.message, "%s: %s" % (e.code, e.message))
+        h.expect(h.dump_material(material) == before, "a refused bake changed the material")
+
+
 def test_save_reopen_then_revert():
     from ndfbake import bake
     with h.scratch_dir() as directory:
@@ -764,7 +815,8 @@ def test_a_deleted_principled_is_made_again():
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_bake_adds_only_the_group_and_bypass, test_failure_while_building_nodes_rolls_back,
-           test_operators_rebake_fewer_lobes_and_revert, test_save_reopen_then_revert,
+           test_operators_rebake_fewer_lobes_and_revert, test_cycles_lobes_narrowed_draws_the_eevee_lobes_everywhere,
+           test_save_reopen_then_revert,
            test_bake_all_bakes_what_the_scene_renders, test_linked_inputs_are_carried_and_restored,
            test_a_user_graph_downstream_gets_no_eevee_output, test_pack_option, test_animated_inputs_keep_animating,
            test_edits_on_the_group_node_survive_rebake_and_revert,

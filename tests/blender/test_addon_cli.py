@@ -59,9 +59,13 @@ def test_command_line_bake_and_revert():
         h.expect(sorted(os.listdir(directory)) == ["Good.ndfbake", "normal.png", "scene.blend", "scene.blend1",
                                                    "srgb.png"], sorted(os.listdir(directory)))
 
-        code, out = h.run_bake_blend(blend, "--material", "Good", "--max-lobes", "1")
+        code, out = h.run_bake_blend(blend, "--material", "Good", "--max-lobes", "1", "--cycles-lobes", "narrowed")
         h.expect(code == 0, "re-bake of Good: exit %d\n%s" % (code, out))
         h.expect("baked Good into //Good~2.ndfbake: 1 lobe," in out, out)
+        h.expect("Cycles draws the lobes narrowed at grazing views" in out, "--cycles-lobes narrowed not said:\n" + out)
+        reopen(blend)
+        h.expect(json.loads(bpy.data.materials["Good"][bake.RECORD_KEY])["settings"]["cycles_lobes"] == "NARROWED",
+                 "--cycles-lobes narrowed did not reach the bake")
         h.expect(os.path.isdir(os.path.join(directory, "Good.ndfbake")),
                  "the replaced folder, which the file saved by the first run used, was deleted")
 
@@ -77,6 +81,8 @@ def test_command_line_bake_and_revert():
         h.expect(code == 2 and "no material named 'Nope'" in out, "unknown material: exit %d\n%s" % (code, out))
         code, out = h.run_bake_blend(blend, "--max-lobes", "0")
         h.expect(code == 2 and "0 is not in 1..8" in out, "--max-lobes 0: exit %d\n%s" % (code, out))
+        code, out = h.run_bake_blend(blend, "--cycles-lobes", "sharp")
+        h.expect(code == 2 and "invalid choice: 'sharp'" in out, "--cycles-lobes sharp: exit %d\n%s" % (code, out))
         h.expect(os.path.getmtime(blend) == mtime, "the .blend was saved after a usage error")
 
         # Blender writes "<file>@" and renames it over the file: a folder of that name makes the

@@ -15,7 +15,9 @@ normal maps synthesized by the library, the sunset HDR), built at 128x72:
   error must be at most half of the naive normal map's, in both engines. Every figure is printed,
   also for the whole image and the near ground. The references are checked first: the far ground
   of the EEVEE reference must be duller than the naive render (the point of filtering), and the
-  naive render must be measurably off.
+  naive render must be measurably off. Then Cycles Lobes: re-baked Narrowed, a converged Cycles
+  render (128 spp) must bring the far ground's mean luminance closer to the reference's than
+  the default Widened does.
 - test_command_line_bake_changes_only_the_baked_materials: examples/bake_blend.py bakes the saved
   demo .blend in a separate `blender -b`; in the saved file the five rendered normal-mapped
   materials are baked and every other datablock (the plain and the unrendered materials, the
@@ -50,6 +52,7 @@ REGRESSION_BOUNDS = {("eevee", "ground_far"): ACCEPTED_RATIO, ("eevee", "spheres
                      ("cycles", "ground_far"): 1.0, ("cycles", "spheres_far"): 1.5,
                      ("cycles", "all"): 0.8, ("cycles", "ground_near"): 0.5}
 MIN_WINDOWS = 40                          # 4x4 windows a region needs for its figure to mean anything
+CONVERGED_SAMPLES = 128                   # Cycles Lobes compared where noise no longer decides
 
 
 def test_image_error_against_references():
@@ -111,6 +114,30 @@ def test_image_error_against_references():
                 if bound is not None and not ratio <= bound:
                     failures.append("%s on %s: ratio %.3f > %.2f" % (what, region, ratio, bound))
         h.expect(not failures, "regressions: " + "; ".join(failures))
+
+        # Cycles Lobes: Narrowed is for converged renders, where the widened lobes' darkening at
+        # grazing views shows and their lower noise no longer counts: the far ground's mean
+        # luminance must come closer to the reference's with it (2026-11-26: 0.75x widened,
+        # 1.11x narrowed at 256 spp).
+        converged = {"widened": demo_scene.render(scene, "CYCLES", os.path.join(renders, "widened.exr"),
+                                                  CONVERGED_SAMPLES, seed=5)}
+        rebakes = demo_scene.bake_all(scene, cycles_lobes="NARROWED")
+        h.expect(all("error" not in b for b in rebakes), "a Narrowed re-bake failed: %s" % rebakes)
+        converged["narrowed"] = demo_scene.render(scene, "CYCLES", os.path.join(renders, "narrowed.exr"),
+                                                  CONVERGED_SAMPLES, seed=5)
+        off = {}
+        for region in REGIONS:
+            m = masks[region]
+            reference = image_error.mean_luminance(images["cycles_reference"], m)
+            for lobes, pixels in converged.items():
+                brightness = image_error.mean_luminance(pixels, m) / reference
+                off[lobes, region] = abs(brightness - 1.0)
+                print("  info Cycles %d spp, Cycles Lobes %s, %s: mean luminance %.3fx the reference's, block "
+                      "error %.4f" % (CONVERGED_SAMPLES, lobes, region, brightness,
+                                      image_error.block_error(pixels, images["cycles_reference"], m)), flush=True)
+        h.expect(off["narrowed", "ground_far"] < off["widened", "ground_far"],
+                 "Cycles Lobes Narrowed is no closer to the reference's far-ground brightness (%.3f off) than "
+                 "Widened (%.3f off)" % (off["narrowed", "ground_far"], off["widened", "ground_far"]))
 
 
 # ---- the command-line bake --------------------------------------------------------------------
