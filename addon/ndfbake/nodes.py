@@ -743,7 +743,7 @@ def carry_animation(material_tree, principled, node, normal_map):
     drivers that read those inputs read the node's."""
     pairs = [(i, j) for i, j in _shared_inputs(principled, node).items() if not principled.inputs[i].is_linked]
     node_animation.copy_input_animation(material_tree, principled, node, pairs, move=False)
-    if not normal_map.inputs["Strength"].links:
+    if material_scan.live_link(normal_map.inputs["Strength"]) is None:  # a muted link is no link
         node_animation.copy_input_animation(material_tree, normal_map, node, _strength_pair(normal_map, node),
                                             move=False)
 
@@ -780,7 +780,7 @@ def write_back_inputs(material_tree, node, principled, normal_map=None):
     node_animation.copy_input_animation(material_tree, node, principled, pairs, move=True)
     if normal_map is not None and "Normal Strength" in node.inputs:
         _copy_input(material_tree.links, node.inputs["Normal Strength"], normal_map.inputs["Strength"])
-        if not node.inputs["Normal Strength"].links:
+        if material_scan.live_link(node.inputs["Normal Strength"]) is None:
             node_animation.copy_input_animation(material_tree, node, normal_map,
                                                 [(j, i) for i, j in _strength_pair(normal_map, node)], move=True)
 
@@ -900,7 +900,7 @@ def commit_replacement(material_tree, replacement):
                 pairs.append((k, j))
         elif not principled.inputs[i].is_linked:
             extra.append((i, j))
-    if "Normal Strength" in old.inputs and not old.inputs["Normal Strength"].links:
+    if "Normal Strength" in old.inputs and material_scan.live_link(old.inputs["Normal Strength"]) is None:
         pairs.append((old.inputs.find("Normal Strength"), node.inputs.find("Normal Strength")))
     node_animation.copy_input_animation(material_tree, old, node, pairs, move=True)
     if extra:

@@ -541,6 +541,69 @@ def test_the_normal_maps_strength_is_carried_like_the_principleds_inputs():
         h.expect(paths == ['nodes["Normal Map"].inputs[0].default_value'], "keyframes after revert: %s" % paths)
 
 
+def test_a_keyed_strength_behind_a_muted_link_is_carried():
+    """A muted link is no link: the Normal Map's Strength keyframed behind a muted link (its value
+    is what renders) animates Normal Strength on the group node (the link carried muted), through a
+    re-bake and a failed one, and Revert gives the Normal Map back its link and keyframes exactly."""
+    from ndfbake import bake
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory)
+        tree = material.node_tree
+        strength = tree.nodes["Normal Map"].inputs["Strength"]
+        value = tree.nodes.new("ShaderNodeValue")
+        value.outputs[0].default_value = 5.0
+        tree.links.new(value.outputs[0], strength).is_muted = True
+        for frame, key in ((1, 0.2), (11, 1.0)):
+            strength.default_value = key
+            strength.keyframe_insert("default_value", frame=frame)
+        scene = bpy.context.scene
+        scene.frame_set(1)
+        bpy.ops.wm.save_mainfile()
+        before = h.dump_material(material)
+        curves_before = [_curve_state(f) for f in tree.animation_data.action.fcurves]
+
+        def check(when):
+            node = tree.nodes["ndfbake"]
+            socket = node.inputs["Normal Strength"]
+            h.expect([(l.from_node, l.is_muted) for l in socket.links] == [(value, True)],
+                     "%s: the muted Strength link is not carried muted: %s"
+                     % (when, [(l.from_node.name, l.is_muted) for l in socket.links]))
+            path = 'nodes["ndfbake"].inputs[%d].default_value' % node.inputs.find("Normal Strength")
+            curves = [_curve_state(f)[1:] for f in tree.animation_data.action.fcurves if f.data_path == path]
+            h.expect(curves == [c[1:] for c in curves_before], "%s: Normal Strength's keyframes %s, the Normal "
+                     "Map's %s" % (when, curves, curves_before))
+            for frame, expected in ((6, 0.6), (11, 1.0)):
+                scene.frame_set(frame)
+                h.expect(abs(socket.default_value - expected) < 0.05, "%s: Normal Strength at frame %d: %g, the "
+                         "keyframes give %g" % (when, frame, socket.default_value, expected))
+            scene.frame_set(1)
+
+        bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        check("after the bake")
+        baked = h.dump_material(material)
+        _bake_with_a_bug_in(material, "_wire_group_node", max_lobes=2)
+        h.expect(h.dump_material(material) == baked, "the failed re-bake changed the material: %s"
+                 % h.differences(baked, h.dump_material(material)))
+        check("after a failed re-bake")
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        check("after the re-bake")
+        bake.revert(material)
+        scene.frame_set(1)
+        h.expect(h.dump_material(material) == before, "material differs after revert: %s"
+                 % h.differences(before, h.dump_material(material)))
+        curves = [_curve_state(f) for f in tree.animation_data.action.fcurves]
+        h.expect(curves == curves_before, "keyframes after revert: %s, before the bake: %s" % (curves, curves_before))
+
+        bake.bake_material(material, bake.BakeSettings(max_lobes=1))  # a key the user moves on the node
+        path = 'nodes["ndfbake"].inputs[%d].default_value' % tree.nodes["ndfbake"].inputs.find("Normal Strength")
+        tree.animation_data.action.fcurves.find(path).keyframe_points[1].co.y = 0.6
+        bake.revert(material)
+        scene.frame_set(11)
+        h.expect(abs(strength.default_value - 0.6) < 1e-4, "Revert did not keep the key moved on the node: the "
+                 "Normal Map's Strength at frame 11 is %g" % strength.default_value)
+        h.expect([l.is_muted for l in strength.links] == [True], "the Strength link after Revert")
+
+
 def test_two_materials_sharing_an_action_bake_and_revert():
     from ndfbake import bake
     with h.scratch_dir() as directory:
@@ -821,6 +884,7 @@ if __name__ == "__main__":
            test_a_user_graph_downstream_gets_no_eevee_output, test_pack_option, test_animated_inputs_keep_animating,
            test_edits_on_the_group_node_survive_rebake_and_revert,
            test_the_normal_maps_strength_is_carried_like_the_principleds_inputs,
+           test_a_keyed_strength_behind_a_muted_link_is_carried,
            test_two_materials_sharing_an_action_bake_and_revert,
            test_nla_strips_and_driver_variables_follow_the_inputs, test_curve_settings_and_deletions_on_the_node_survive,
            test_a_copy_sharing_the_action_keeps_its_own_edits,
