@@ -799,7 +799,8 @@ def insert_group_node(material_tree, group_tree, principled, normal_map, image_t
         carry_animation(material_tree, principled, node, normal_map)
         return node, bypassed, add_eevee_output(material_tree, node, bypassed)
     except Exception:
-        remove_group_node(material_tree, node.name, principled.name, bypassed, keep_edits=False)
+        remove_group_node(material_tree, node.name, principled.name, bypassed, keep_edits=False,
+                          normal_map_name=normal_map.name)
         raise
 
 
@@ -1040,17 +1041,19 @@ def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee
         nodes.remove(added)
     node = find(node_name, "group")
     principled = find(principled_name, "principled")
+    normal_map = find(normal_map_name, "normal_map") if normal_map_name else None
     if principled is None and node is not None and keep_edits:
-        principled = _recreate_principled(material_tree, node, principled_name, settings,
-                                          find(normal_map_name, "normal_map") if normal_map_name else None)
+        principled = _recreate_principled(material_tree, node, principled_name, settings, normal_map)
     group_tree = node.node_tree if node is not None else None
     if node is not None and principled is not None:
         if keep_edits:
-            write_back_inputs(material_tree, node, principled,
-                              find(normal_map_name, "normal_map") if normal_map_name else None)
+            write_back_inputs(material_tree, node, principled, normal_map)
         else:
             node_animation.retarget_variables(material_tree, node, principled,
                                               [(j, i) for i, j in _shared_inputs(principled, node).items()])
+            if normal_map is not None and "Normal Strength" in node.inputs:
+                node_animation.retarget_variables(material_tree, node, normal_map,
+                                                  [(j, i) for i, j in _strength_pair(normal_map, node)])
     node_animation.remove_node_animation(material_tree, node.name if node is not None else node_name)
     if node is not None:
         leaving = [link for output in node.outputs if output.type == "SHADER" for link in output.links]

@@ -771,6 +771,33 @@ def test_driver_variables_by_socket_name_and_on_the_material_follow():
                  % [v.targets[0].data_path for v in variables])
 
 
+def test_a_driver_variable_reading_the_strength_follows_it():
+    """A variable that reads the Normal Map's Strength reads Normal Strength on the group node while
+    baked and the Normal Map's again after Revert, and is left as it was by a bake that fails after
+    the node got its inputs, as for the Principled's inputs."""
+    from ndfbake import bake
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory)
+        tree = material.node_tree
+        reader = tree.nodes.new("ShaderNodeValue")
+        driver = reader.outputs[0].driver_add("default_value").driver
+        driver.type = "SUM"
+        variable = driver.variables.new()
+        variable.targets[0].id_type = "MATERIAL"
+        variable.targets[0].id = material
+        path = 'node_tree.nodes["Normal Map"].inputs["Strength"].default_value'
+        variable.targets[0].data_path = path
+        _bake_with_a_bug_in(material, "add_eevee_output", max_lobes=1)
+        h.expect(variable.targets[0].data_path == path, "the failed bake left %s" % variable.targets[0].data_path)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=1))
+        tree.nodes["ndfbake"].inputs["Normal Strength"].default_value = 0.75
+        bpy.context.scene.frame_set(2)
+        h.expect(abs(reader.outputs[0].default_value - 0.75) < 1e-6, "the driver reads %g, not the node's Normal "
+                 "Strength 0.75" % reader.outputs[0].default_value)
+        bake.revert(material)
+        h.expect(variable.targets[0].data_path == path, "Revert left %s" % variable.targets[0].data_path)
+
+
 def test_a_linked_action_is_refused():
     """An action linked from a library cannot keep the group node's curves: LINKED_ANIMATION, and
     the material stays as it was."""
@@ -888,6 +915,7 @@ if __name__ == "__main__":
            test_two_materials_sharing_an_action_bake_and_revert,
            test_nla_strips_and_driver_variables_follow_the_inputs, test_curve_settings_and_deletions_on_the_node_survive,
            test_a_copy_sharing_the_action_keeps_its_own_edits,
-           test_driver_variables_by_socket_name_and_on_the_material_follow, test_a_linked_action_is_refused,
+           test_driver_variables_by_socket_name_and_on_the_material_follow,
+           test_a_driver_variable_reading_the_strength_follows_it, test_a_linked_action_is_refused,
            test_a_material_changed_during_the_bake_is_not_baked, test_renamed_nodes_are_found_again,
            test_a_deleted_principled_is_made_again])
