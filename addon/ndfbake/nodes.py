@@ -721,31 +721,25 @@ def drive_lod_inputs(node, scene, camera_object):
         var.targets[0].data_path = path
 
 
-def _shared_inputs(principled, node):
-    """{Principled input index: group node input index} for the inputs the group carries."""
-    pairs = {}
-    for i, socket in enumerate(principled.inputs):
-        j = node.inputs.find(socket.name)
-        if j >= 0:
-            pairs[i] = j
-    return pairs
-
-
-def _strength_pair(normal_map, node):
-    """[(the Normal Map's Strength index, the group node's Normal Strength index)]."""
-    return [(normal_map.inputs.find("Strength"), node.inputs.find("Normal Strength"))]
+def _shared_inputs(node, principled, normal_map=None):
+    """[(principled, {its input index: group node input index}), (normal_map, {...})] for the inputs
+    the group node carries: the Principled's of the same name, the Normal Map's Strength as Normal
+    Strength (left out without normal_map)."""
+    shared = [(principled, {i: node.inputs.find(s.name) for i, s in enumerate(principled.inputs)
+                            if s.name in node.inputs})]
+    if normal_map is not None and "Normal Strength" in node.inputs:
+        shared.append((normal_map, {normal_map.inputs.find("Strength"): node.inputs.find("Normal Strength")}))
+    return shared
 
 
 def carry_animation(material_tree, principled, node, normal_map):
-    """Copies the keyframes and drivers of the Principled's unlinked inputs to the group node's
-    inputs of the same name, which hold those values after the bake, and the Normal Map's Strength's
-    to Normal Strength: an animated colour, emission or bump strength goes on animating, and
+    """Copies the keyframes and drivers of the Principled's and the Normal Map's carried inputs with
+    no live link (a muted link is no link) to the group node's inputs that hold those values after
+    the bake (_shared_inputs): an animated colour, emission or bump strength goes on animating, and
     drivers that read those inputs read the node's."""
-    pairs = [(i, j) for i, j in _shared_inputs(principled, node).items() if not principled.inputs[i].is_linked]
-    node_animation.copy_input_animation(material_tree, principled, node, pairs, move=False)
-    if material_scan.live_link(normal_map.inputs["Strength"]) is None:  # a muted link is no link
-        node_animation.copy_input_animation(material_tree, normal_map, node, _strength_pair(normal_map, node),
-                                            move=False)
+    for source, pairs in _shared_inputs(node, principled, normal_map):
+        unlinked = [(i, j) for i, j in pairs.items() if material_scan.live_link(source.inputs[i]) is None]
+        node_animation.copy_input_animation(material_tree, source, node, unlinked, move=False)
 
 
 def _copy_input(links, source, target):
@@ -772,17 +766,11 @@ def write_back_inputs(material_tree, node, principled, normal_map=None):
     the Principled BSDF, and Normal Strength to the Normal Map's Strength, before the node goes, so
     that Revert keeps the user's edits on the node and a re-bake starts from them. Unedited, the
     Principled and the Normal Map are left exactly as they were."""
-    pairs = []
-    for i, j in _shared_inputs(principled, node).items():
-        _copy_input(material_tree.links, node.inputs[j], principled.inputs[i])
-        if not node.inputs[j].is_linked:
-            pairs.append((j, i))
-    node_animation.copy_input_animation(material_tree, node, principled, pairs, move=True)
-    if normal_map is not None and "Normal Strength" in node.inputs:
-        _copy_input(material_tree.links, node.inputs["Normal Strength"], normal_map.inputs["Strength"])
-        if material_scan.live_link(node.inputs["Normal Strength"]) is None:
-            node_animation.copy_input_animation(material_tree, node, normal_map,
-                                                [(j, i) for i, j in _strength_pair(normal_map, node)], move=True)
+    for target, pairs in _shared_inputs(node, principled, normal_map):
+        for i, j in pairs.items():
+            _copy_input(material_tree.links, node.inputs[j], target.inputs[i])
+        unlinked = [(j, i) for i, j in pairs.items() if material_scan.live_link(node.inputs[j]) is None]
+        node_animation.copy_input_animation(material_tree, node, target, unlinked, move=True)
 
 
 def insert_group_node(material_tree, group_tree, principled, normal_map, image_texture):
@@ -816,6 +804,7 @@ class Replacement:
     node: str                     # the new group node's name (REBAKE_NAME, made unique)
     old: str                      # the name of the group node it replaces
     principled: str
+    normal_map: str
     roles: dict                   # {node name: its ROLE_KEY value before (None: none)}
     had_animation: bool           # whether the tree had animation data before
     eevee_output: str             # old's EEVEE output (add_eevee_output), which the new node takes over; ""
@@ -840,7 +829,7 @@ def replace_group_node(material_tree, group_tree, principled, normal_map, image_
     key = str(old.get(material_scan.ROLE_KEY, "")).partition(":")[2] or old.name  # (a record older than roles)
     eevee = material_scan.recorded_node(material_tree, eevee_output, material_scan.node_role("eevee_output", key)) \
         if eevee_output else None
-    replacement = Replacement(node="", old=old.name, principled=principled.name,
+    replacement = Replacement(node="", old=old.name, principled=principled.name, normal_map=normal_map.name,
                               roles={n.name: n.get(material_scan.ROLE_KEY) for n in (principled, normal_map)},
                               had_animation=material_tree.animation_data is not None,
                               eevee_output=eevee.name if eevee else "")
@@ -885,27 +874,25 @@ def undo_replacement(material_tree, replacement):
 
 def commit_replacement(material_tree, replacement):
     """Puts a re-bake's group node in the place of the old one for good: the keyframes and drivers
-    of old's inputs move to it (and the Principled's, as a first bake copies them, for inputs old
-    did not carry), old goes, and the new node takes the name a bake gives its node, the roles'
+    of old's inputs move to it (and the Principled's or the Normal Map's, as a first bake copies
+    them, for inputs old did not carry), old goes, and the new node takes the name a bake gives its node, the roles'
     key with it (Blender renames the animation paths and driver variables that name it), old's
     EEVEE output's too. Returns the node."""
     nodes = material_tree.nodes
-    node, old, principled = nodes[replacement.node], nodes[replacement.old], nodes[replacement.principled]
+    node, old = nodes[replacement.node], nodes[replacement.old]
     old_key = str(old.get(material_scan.ROLE_KEY, "")).partition(":")[2]
-    pairs, extra = [], []
-    for i, j in _shared_inputs(principled, node).items():
-        name = principled.inputs[i].name
-        if name in old.inputs:
-            k = old.inputs.find(name)
-            if not old.inputs[k].is_linked:
-                pairs.append((k, j))
-        elif not principled.inputs[i].is_linked:
-            extra.append((i, j))
-    if "Normal Strength" in old.inputs and material_scan.live_link(old.inputs["Normal Strength"]) is None:
-        pairs.append((old.inputs.find("Normal Strength"), node.inputs.find("Normal Strength")))
+    pairs = []
+    for source, shared in _shared_inputs(node, nodes[replacement.principled], nodes[replacement.normal_map]):
+        extra = []
+        for i, j in shared.items():
+            k = old.inputs.find(node.inputs[j].name)
+            if k >= 0:
+                if material_scan.live_link(old.inputs[k]) is None:
+                    pairs.append((k, j))
+            elif material_scan.live_link(source.inputs[i]) is None:  # not carried by old: as a first bake
+                extra.append((i, j))
+        node_animation.copy_input_animation(material_tree, source, node, extra, move=False)
     node_animation.copy_input_animation(material_tree, old, node, pairs, move=True)
-    if extra:
-        node_animation.copy_input_animation(material_tree, principled, node, extra, move=False)
     node_animation.remove_node_animation(material_tree, old.name)
     node_animation.remove_node(material_tree, old)
     new_key = node.name
@@ -972,10 +959,10 @@ def _wire_group_node(material_tree, node, group_tree, principled, normal_map, im
     node.location = (placed.location.x, placed.location.y + (0 if replacing is not None else GROUP_NODE_OFFSET))
     node.width = max(placed.width if replacing is not None else node.width, 220)
     node.parent = placed.parent
-    for socket in carried_inputs(principled, replacing):
-        _copy_input(links, held_input(principled, replacing, socket.name), node.inputs[socket.name])
-    strength = replacing.inputs["Normal Strength"] if replacing is not None else normal_map.inputs["Strength"]
-    _copy_input(links, strength, node.inputs["Normal Strength"])
+    for source, pairs in _shared_inputs(node, principled, normal_map):
+        for i, j in pairs.items():  # a re-bake's as the node it replaces holds them (held_input)
+            held = replacing.inputs.get(node.inputs[j].name) if replacing is not None else None
+            _copy_input(links, held if held is not None else source.inputs[i], node.inputs[j])
     if "Vector" in node.inputs:  # made only where the texture's Vector has a live link
         links.new(material_scan.live_link(image_texture.inputs["Vector"]).from_socket, node.inputs["Vector"])
 
@@ -1049,11 +1036,8 @@ def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee
         if keep_edits:
             write_back_inputs(material_tree, node, principled, normal_map)
         else:
-            node_animation.retarget_variables(material_tree, node, principled,
-                                              [(j, i) for i, j in _shared_inputs(principled, node).items()])
-            if normal_map is not None and "Normal Strength" in node.inputs:
-                node_animation.retarget_variables(material_tree, node, normal_map,
-                                                  [(j, i) for i, j in _strength_pair(normal_map, node)])
+            for target, pairs in _shared_inputs(node, principled, normal_map):
+                node_animation.retarget_variables(material_tree, node, target, [(j, i) for i, j in pairs.items()])
     node_animation.remove_node_animation(material_tree, node.name if node is not None else node_name)
     if node is not None:
         leaving = [link for output in node.outputs if output.type == "SHADER" for link in output.links]
