@@ -875,9 +875,9 @@ def undo_replacement(material_tree, replacement):
 def commit_replacement(material_tree, replacement):
     """Puts a re-bake's group node in the place of the old one for good: the keyframes and drivers
     of old's inputs move to it (and the Principled's or the Normal Map's, as a first bake copies
-    them, for inputs old did not carry), old goes, and the new node takes the name a bake gives its node, the roles'
-    key with it (Blender renames the animation paths and driver variables that name it), old's
-    EEVEE output's too. Returns the node."""
+    them, for inputs old did not carry), old goes, and the new node takes the name a bake gives
+    its node, the roles' key with it (Blender renames the animation paths and driver variables
+    that name it), old's EEVEE output's too. Returns the node."""
     nodes = material_tree.nodes
     node, old = nodes[replacement.node], nodes[replacement.old]
     old_key = str(old.get(material_scan.ROLE_KEY, "")).partition(":")[2]
