@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 
 import bpy
 
-from . import lobe_folders, material_scan, native, nodes, scene_lod
+from . import id_names, lobe_folders, material_scan, native, nodes, scene_lod
 
 RECORD_KEY = material_scan.RECORD_KEY
 RECORD_VERSION = 1
@@ -343,19 +343,6 @@ def _relative(path):
         return path
 
 
-def _free_name(collection, wanted, own=None):
-    """`wanted`, or wanted.001, .002… where taken (by another ID than `own`): Blender 3.4 gives an
-    ID renamed to a taken name that name and renames the ID that had it, which must not happen to
-    a previous bake's. Cut as Blender cuts ID names (63 bytes), or a long name would be taken
-    after all."""
-    name, k = nodes.cut_name(wanted), 0
-    while name in collection and collection[name] != own:
-        k += 1
-        suffix = ".%03d" % k
-        name = nodes.cut_name(wanted, nodes.ID_NAME_BYTES - len(suffix)) + suffix
-    return name
-
-
 def _load_lobe_images(material_name, paths, pack, created):
     """Lobe images (Non-Color, channel-packed alpha: A is data, α·r_z), named "<material> lobe j"
     (while a previous bake's images hold those names, another: _take_names), all new (a bake's
@@ -364,7 +351,7 @@ def _load_lobe_images(material_name, paths, pack, created):
     images = []
     for j, path in enumerate(paths):
         image = bpy.data.images.load(path)
-        image.name = _free_name(bpy.data.images, "%s lobe %d" % (material_name, j))
+        image.name = id_names.free(bpy.data.images, material_name, " lobe %d" % j)
         image[nodes.TAG] = nodes.GROUP_VERSION
         created.append(image.name)
         image.filepath = _relative(path)
@@ -556,15 +543,15 @@ def _take_names(material, targets, images):
     lobe j", "NDFB <material>", .001… where taken), which the previous bake's, now gone, held
     while both existed."""
     for j, image in enumerate(images):
-        image.name = _free_name(bpy.data.images, "%s lobe %d" % (material.name, j), image)
+        image.name = id_names.free(bpy.data.images, material.name, " lobe %d" % j, image)
     for target in targets:
         group = bpy.data.node_groups.get(target["node_group"])
         if group is None:
             continue
-        group.name = _free_name(bpy.data.node_groups, "NDFB " + material.name, group)
+        group.name = id_names.free(bpy.data.node_groups, "NDFB " + material.name, own=group)
         table = nodes.atlas_table(group)  # named after it
         if table is not None:
-            table.name = _free_name(bpy.data.node_groups, nodes.atlas_table_name(group.name), table)
+            table.name = id_names.free(bpy.data.node_groups, *nodes.atlas_table_name(group.name), own=table)
         target["node_group"] = group.name
 
 

@@ -53,7 +53,7 @@ from dataclasses import dataclass, field
 
 import bpy
 
-from . import material_scan, node_animation, scene_lod
+from . import id_names, material_scan, node_animation, scene_lod
 
 GROUP_VERSION = 2
 TAG = "ndfbake"                       # ID/custom property marking what this add-on created
@@ -68,7 +68,6 @@ EEVEE_BSDF = "EEVEE BSDF"             # the group's second shader output (narrow
 WIDENED, NARROWED = "WIDENED", "NARROWED"
 TAP_CORNERS = ("00", "10", "01", "11")  # x then y offset of a bilinear tap
 ATLAS_LOOKUP = "Atlas Level %d"       # the material group's atlas-table nodes (0: low, 1: high level)
-ID_NAME_BYTES = 63                    # Blender cuts the names of data-blocks to 63 bytes
 GGX_VMF_WIDENING = 1.5                # native/src/math/brdf.h kGgxVmfWidening
 HALF_INV_KAPPA_RESOLUTION = 4e-4      # native/src/io/lobe_exr.h kHalfInvKappaResolution (the add-on
                                       # writes half floats)
@@ -372,14 +371,11 @@ def bilinear_group():
     return tree
 
 
-def cut_name(name, size=ID_NAME_BYTES):
-    """`name` cut to `size` bytes of UTF-8 (whole characters), as Blender cuts ID names."""
-    return name.encode("utf-8")[:size].decode("utf-8", errors="ignore")
-
-
 def atlas_table_name(group_name):
-    """'<group> atlas', the group's name cut so that " atlas" fits in an ID name."""
-    return cut_name(group_name, ID_NAME_BYTES - len(" atlas")) + " atlas"
+    """(body, tail) of the name of a group's atlas table (id_names): "<group> atlas", the group's
+    ".NNN" kept before " atlas", its body cut to fit."""
+    body, number = id_names.numbered(group_name)
+    return body, number + " atlas"
 
 
 def atlas_table(group_tree):
@@ -474,7 +470,7 @@ def _atlas_levels(tree, gin, name, atlas, repeat, uv):
     high = _math(tree, "MINIMUM", _math(tree, "ADD", low, 1.0, location=(-1700, 500)), float(len(atlas.levels) - 1),
                  location=(-1550, 500))
     blend = _math(tree, "SUBTRACT", level, low, location=(-1700, 300))
-    table = atlas_table_group(atlas_table_name(name), atlas)
+    table = atlas_table_group(id_names.fit(*atlas_table_name(name)), atlas)
     taps = []
     for k, index in enumerate((low, high)):
         lookup = tree.nodes.new("ShaderNodeGroup")

@@ -14,7 +14,8 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 - A bake with a camera writes only the levels the camera reaches, and one atlas per lobe; the
   group's pixel angle follows the lens and the resolution through drivers; revert removes them.
 - A material name near Blender's 63-byte limit: revert removes its atlas table, and re-bakes give
-  its group and atlas table the first bake's names, with no stale table left.
+  its group and atlas table the first bake's names, with no stale table left; two names Blender
+  would cut alike keep, cut, what each ID is (a group's .001 before " atlas", " lobe j").
 - A Mapping node that tiles the texture 4x (Point) or 2x (Texture type, scale 0.5) multiplies the
   texel density by 4 (2), a muted one by 1, and so does a muted link from it into the texture (the
   group then gets no Vector input); a UV Map node reading a UV map tiled 4x gives 4x; coordinates
@@ -332,6 +333,46 @@ def test_a_rebake_of_a_long_material_name_names_its_atlas_table():
         h.expect(not leftovers, "revert left node groups: %s" % leftovers)
 
 
+def test_long_names_that_blender_cuts_alike_keep_what_each_id_is():
+    """Two materials whose groups' names Blender would cut to the same 63 bytes ('NDFB ', 20 CJK
+    characters, A or B: 66 bytes of UTF-8): the second bake's group takes a .001, and every name still
+    says what it is: the atlas tables end in " atlas" after their group's number, the images in
+    " lobe j" (before a .001 of their own), all valid UTF-8 within 63 bytes; re-bakes keep them."""
+    from ndfbake import bake
+    with h.scratch_dir() as directory:
+        stem = "\u6f22" * 20
+        first = h.baked_scene(directory, size=32, material_name=stem + "A")
+        second = h.normal_mapped_material(stem + "B", bpy.path.abspath(first.node_tree.nodes["Normal Texture"]
+                                                                      .image.filepath))
+        h.plane_with(second, "Second")
+        _camera(location=(0.0, 0.0, 6.0), lens=50.0)
+        bpy.ops.wm.save_mainfile()
+        for round_ in (1, 2):
+            for material in (first, second):
+                bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+            names = {}
+            for material in (first, second):
+                group = material.node_tree.nodes["ndfbake"].node_tree
+                tables = [n.node_tree.name for n in group.nodes if n.name.startswith("Atlas Level")]
+                record = json.loads(material[bake.RECORD_KEY])
+                names[material.name] = (group.name, sorted(set(tables)), sorted(record["images"]))
+            print("  round %d: %s" % (round_, names))
+            (group_a, tables_a, images_a), (group_b, tables_b, images_b) = names[first.name], names[second.name]
+            h.expect(group_b.endswith(".001") and group_a.startswith(group_b[:-len(".001")]),
+                     "groups %r and %r" % (group_a, group_b))
+            for group, tables, tail in ((group_a, tables_a, " atlas"), (group_b, tables_b, ".001 atlas")):
+                h.expect(len(tables) == 1 and tables[0].endswith(tail)
+                         and group.startswith(tables[0][:-len(tail)]), "%r's atlas tables: %s" % (group, tables))
+            for images in (images_a, images_b):
+                h.expect(len(images) == 2 and all(" lobe %d" % j in name for j, name in enumerate(images)),
+                         "lobe images %s" % images)
+            for name in [group_a, group_b] + tables_a + tables_b + images_a + images_b:
+                h.expect(len(name.encode("utf-8")) <= 63, "%r is %d bytes" % (name, len(name.encode("utf-8"))))
+        for material in (first, second):
+            bake.revert(material)
+        h.expect(not bpy.data.node_groups, "revert left node groups: %s" % [g.name for g in bpy.data.node_groups])
+
+
 def test_a_mapping_node_scales_the_texel_density():
     from ndfbake import bake
     with h.scratch_dir() as directory:
@@ -439,5 +480,6 @@ if __name__ == "__main__":
            test_a_bake_with_a_camera_writes_only_the_levels_it_reaches,
            test_revert_removes_the_atlas_table_of_a_long_material_name,
            test_a_rebake_of_a_long_material_name_names_its_atlas_table,
+           test_long_names_that_blender_cuts_alike_keep_what_each_id_is,
            test_a_mapping_node_scales_the_texel_density,
            test_texel_density_counts_only_the_material_faces_and_the_render_uv_map])
