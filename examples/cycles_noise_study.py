@@ -15,9 +15,9 @@ and --converged-samples once, and prints per region (far ground, far spheres): r
 figure, against the reference), noise (16 spp against the converged render), bias (converged against
 the reference; it includes the reference's own noise), block (4x4 mean luminance error at 16 spp,
 and of the converged render) and the converged render's mean luminance beside the reference's.
-Variants: widened (the baked groups as Cycles draws them), narrowed (Cycles drawing the groups'
-EEVEE BSDF output, the lobes narrowed at grazing views), and either with -ggx (the lobes'
-Multiscatter GGX set to GGX).
+Variants, each a bake of every material: widened and narrowed (the bake's Cycles Lobes setting:
+the widened lobes, or the ones EEVEE draws, narrowed at grazing views), either with -ggx (the
+lobes' Multiscatter GGX set to GGX).
 """
 import argparse
 import json
@@ -92,29 +92,18 @@ def split_sun(scene):
             "elevation_degrees": math.degrees(elevation)}
 
 
-def use_variant(variant):
-    """Sets the baked groups up as `variant` draws them; returns a function that undoes it."""
-    undo = []
-    if variant.startswith("narrowed"):
-        from ndfbake import nodes
-        for material in bpy.data.materials:
-            if not material.use_nodes:
-                continue
-            tree = material.node_tree
-            for link in list(tree.links):
-                group, output = link.from_node, link.to_node
-                if group.bl_idname == "ShaderNodeGroup" and link.from_socket.name == "BSDF" \
-                        and output.bl_idname == "ShaderNodeOutputMaterial" and output.target in ("ALL", "CYCLES"):
-                    to_socket = link.to_socket
-                    tree.links.new(group.outputs[nodes.EEVEE_BSDF], to_socket)
-                    undo.append(lambda t=tree, g=group, s=to_socket: t.links.new(g.outputs["BSDF"], s))
+def use_variant(scene, variant):
+    """Re-bakes the scene's materials so that Cycles draws them as `variant` says."""
+    from ndfbake import nodes
+    lobes = nodes.NARROWED if variant.startswith("narrowed") else nodes.WIDENED
+    for outcome in demo_scene.bake_all(scene, cycles_lobes=lobes):
+        if "error" in outcome:
+            raise RuntimeError("bake of %s failed: %s" % (outcome["material"], outcome["message"]))
     if variant.endswith("-ggx"):
         for group in bpy.data.node_groups:
             for node in group.nodes:
                 if node.bl_idname == "ShaderNodeBsdfPrincipled" and node.distribution == "MULTI_GGX":
                     node.distribution = "GGX"
-                    undo.append(lambda n=node: setattr(n, "distribution", "MULTI_GGX"))
-    return lambda: [u() for u in reversed(undo)]
 
 
 def study(out, world, sun_lamp, reference_samples, converged_samples, variants, width, height):
@@ -148,13 +137,9 @@ def study(out, world, sun_lamp, reference_samples, converged_samples, variants, 
                                         row["block_converged"], row["mean"], row["reference_mean"]), flush=True)
 
     measure("naive")
-    for outcome in demo_scene.bake_all(scene):
-        if "error" in outcome:
-            raise RuntimeError("bake of %s failed: %s" % (outcome["material"], outcome["message"]))
     for variant in variants:
-        undo = use_variant(variant)
+        use_variant(scene, variant)
         measure(variant)
-        undo()
     for row in rows:
         if row["variant"] != "naive":
             naive = next(r for r in rows if r["variant"] == "naive" and r["region"] == row["region"])

@@ -494,9 +494,10 @@ def montage(rows, path, scene=None, gap=4):
 
 # ---- the demo -------------------------------------------------------------------------------------
 
-def bake_all(scene, max_lobes=MAX_LOBES, cycles_lobes="WIDENED"):
+def bake_all(scene, max_lobes=MAX_LOBES, **settings):
+    """Bakes every material the scene needs with BakeSettings(max_lobes, **settings)."""
     from ndfbake import bake
-    settings = bake.BakeSettings(max_lobes=max_lobes, cycles_lobes=cycles_lobes)
+    settings = bake.BakeSettings(max_lobes=max_lobes, **settings)
     outcomes = bake.bake_materials(bake.materials_needing_bake(scene), settings_for=lambda m: settings)
     summary = []
     for name, outcome in outcomes:

@@ -159,6 +159,11 @@ def node_role(role, key):
     return "%s:%s" % (role, key)
 
 
+def role_key(node):
+    """The key of the node's role (node_role): the name its bake's group node was made with; "" if none."""
+    return str(node.get(ROLE_KEY, "")).partition(":")[2]
+
+
 def recorded_node(tree, name, role):
     """The node a bake record calls `name`, playing `role` (node_role): by name while it carries
     the role; renamed, the one node that carries it (a copy carries it too: then none is sure);
@@ -171,7 +176,7 @@ def recorded_node(tree, name, role):
         return carriers[0]
     key = role.partition(":")[2]
     if not carriers and node is not None and node.get(ROLE_KEY) is None and \
-            not any(str(n.get(ROLE_KEY, "")).partition(":")[2] == key for n in tree.nodes):
+            not any(role_key(n) == key for n in tree.nodes):
         return node
     return None
 
@@ -179,7 +184,7 @@ def recorded_node(tree, name, role):
 def clear_roles(tree, key):
     """Takes the roles of the bake whose group node was made as `key` off every node."""
     for node in tree.nodes:
-        if ROLE_KEY in node.keys() and str(node[ROLE_KEY]).partition(":")[2] == key:
+        if ROLE_KEY in node.keys() and role_key(node) == key:
             del node[ROLE_KEY]
 
 

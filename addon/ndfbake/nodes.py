@@ -229,8 +229,9 @@ def grazing_roughness_group():
     test 128×72): no narrowing 1.11 / 0.49 and 1.18 / 0.31; α′²(1 + α′² tan²θ)^(−p) with p = 1/3
     0.40 / 0.48 and 0.55 / 0.34, p = 1/2 0.31 / 0.47 and 0.40 / 0.34, p = 1 (this) 0.25 / 0.44 and
     0.29 / 0.33, with the far ground's mean luminance 2.11 against the reference's 2.16 (p = 2
-    overshoots it: 2.21). Cycles keeps the widened lobes: there narrowed sun glints at grazing
-    views came out as fireflies at 16 samples per pixel (README, open problems)."""
+    overshoots it: 2.21). Cycles draws the widened lobes unless the bake's cycles_lobes is
+    NARROWED: there narrowed sun glints at grazing views come out as fireflies at 16 samples per
+    pixel, though converged they are closer (README, open problems)."""
     tree = _find_group(GRAZING_GROUP)
     if tree is not None:
         return tree
@@ -822,7 +823,7 @@ def replace_group_node(material_tree, group_tree, principled, normal_map, image_
     by node name, move at the commit, and so does the role of old's EEVEE output, which the bake
     record calls `eevee_output` (found by its role: material_scan.recorded_node). Returns a
     Replacement."""
-    key = str(old.get(material_scan.ROLE_KEY, "")).partition(":")[2] or old.name  # (a record older than roles)
+    key = material_scan.role_key(old) or old.name  # (a record older than roles)
     eevee = material_scan.recorded_node(material_tree, eevee_output, material_scan.node_role("eevee_output", key)) \
         if eevee_output else None
     replacement = Replacement(node="", old=old.name, principled=principled.name, normal_map=normal_map.name,
@@ -876,7 +877,7 @@ def commit_replacement(material_tree, replacement):
     that name it), old's EEVEE output's too. Returns the node."""
     nodes = material_tree.nodes
     node, old = nodes[replacement.node], nodes[replacement.old]
-    old_key = str(old.get(material_scan.ROLE_KEY, "")).partition(":")[2]
+    old_key = material_scan.role_key(old)
     pairs = []
     for source, shared in _shared_inputs(node, nodes[replacement.principled], nodes[replacement.normal_map]):
         extra = []
@@ -908,8 +909,10 @@ def add_eevee_output(material_tree, node, bypassed):
     Cycles goes on drawing the All output, fed by the group's BSDF. Added only where that output is
     the Principled's one destination, it is the active one, and the material has no EEVEE output
     yet: elsewhere (shader mixes, outputs per engine the user made) the graph downstream is the
-    user's, and both engines draw the widened lobes. Returns the new node's name, or ""; on an
-    error, removes what it added."""
+    user's, and both engines draw the group's BSDF. With cycles_lobes NARROWED both outputs draw
+    the same lobes and this output changes nothing that EEVEE draws; it is added all the same, so
+    that a bake's nodes and a re-bake that switches the setting stay one layout. Returns the new
+    node's name, or ""; on an error, removes what it added."""
     nodes = material_tree.nodes
     if len(bypassed) != 1 or any(n.bl_idname == "ShaderNodeOutputMaterial" and n.target == "EEVEE" for n in nodes):
         return ""

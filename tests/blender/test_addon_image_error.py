@@ -56,6 +56,7 @@ CONVERGED_SAMPLES = 128                   # Cycles Lobes compared where noise no
 
 
 def test_image_error_against_references():
+    from ndfbake import nodes
     with h.scratch_dir() as directory:
         h.reset_scene()
         scene_info = demo_scene.build_scene(directory, WIDTH, HEIGHT)
@@ -117,11 +118,11 @@ def test_image_error_against_references():
 
         # Cycles Lobes: Narrowed is for converged renders, where the widened lobes' darkening at
         # grazing views shows and their lower noise no longer counts: the far ground's mean
-        # luminance must come closer to the reference's with it (2026-11-26: 0.75x widened,
-        # 1.11x narrowed at 256 spp).
+        # luminance must come closer to the reference's with it (2026-11-26: 0.74x widened,
+        # 1.12x narrowed at 128 spp).
         converged = {"widened": demo_scene.render(scene, "CYCLES", os.path.join(renders, "widened.exr"),
                                                   CONVERGED_SAMPLES, seed=5)}
-        rebakes = demo_scene.bake_all(scene, cycles_lobes="NARROWED")
+        rebakes = demo_scene.bake_all(scene, cycles_lobes=nodes.NARROWED)
         h.expect(all("error" not in b for b in rebakes), "a Narrowed re-bake failed: %s" % rebakes)
         converged["narrowed"] = demo_scene.render(scene, "CYCLES", os.path.join(renders, "narrowed.exr"),
                                                   CONVERGED_SAMPLES, seed=5)
