@@ -25,7 +25,7 @@ import bpy
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import test_addon_helpers as h  # noqa: E402
 
-EXPECTED_FILES = {"__init__.py", "native.py", "material_scan.py", "scene_lod.py", "nodes.py", "node_animation.py", "lobe_folders.py", "bake.py", "operators.py", "ui.py",
+EXPECTED_FILES = {"__init__.py", "native.py", "material_scan.py", "scene_lod.py", "nodes.py", "node_animation.py", "lobe_folders.py", "id_names.py", "bake.py", "operators.py", "ui.py",
                   "libndfbake.so"}
 
 
