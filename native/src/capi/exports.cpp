@@ -106,17 +106,17 @@ PyramidSettings to_pyramid(const ndfb_fit_options* o)
     s.threads = int(o->threads);
     s.method = method == NDFB_FIT_HIERARCHICAL ? FitMethod::hierarchical : FitMethod::per_level;
     // Added after ABI 1's first release: read only from callers whose struct has them.
-    if (o->struct_size >= offsetof(ndfb_fit_options, max_memory_bytes) + sizeof(o->max_memory_bytes))
+    if (o->struct_size >= NDFB_SIZE_THROUGH(ndfb_fit_options, max_memory_bytes))
         s.max_memory_bytes = o->max_memory_bytes;
-    if (o->struct_size >= offsetof(ndfb_fit_options, max_levels) + sizeof(o->max_levels)) {
+    if (o->struct_size >= NDFB_SIZE_THROUGH(ndfb_fit_options, max_levels)) {
         require(o->max_levels <= 64, "max_levels must be at most 64 (0: every level), got " + std::to_string(o->max_levels));
         s.max_levels = int(o->max_levels);
     }
-    if (o->struct_size >= offsetof(ndfb_fit_options, starts) + sizeof(o->starts)) {
+    if (o->struct_size >= NDFB_SIZE_THROUGH(ndfb_fit_options, starts)) {
         require(o->starts == 1 || o->starts == 2, "starts must be 1 or 2, got " + std::to_string(o->starts));
         s.fit.two_starts = o->starts == 2;
     }
-    if (o->struct_size >= offsetof(ndfb_fit_options, refine) + sizeof(o->refine)) s.refine = o->refine != 0;
+    if (o->struct_size >= NDFB_SIZE_THROUGH(ndfb_fit_options, refine)) s.refine = o->refine != 0;
     return s;
 }
 
@@ -131,7 +131,7 @@ WriteSettings to_write(const ndfb_write_options* o)
     w.precision = precision == NDFB_PRECISION_FLOAT ? PixelPrecision::single : PixelPrecision::half;
     if (o->color_path) w.color_path = o->color_path;
     if (o->source_name) w.source_name = o->source_name;
-    if (o->struct_size >= offsetof(ndfb_write_options, atlas) + sizeof(o->atlas)) w.atlas = o->atlas != 0;
+    if (o->struct_size >= NDFB_SIZE_THROUGH(ndfb_write_options, atlas)) w.atlas = o->atlas != 0;
     return w;
 }
 

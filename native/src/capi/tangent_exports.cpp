@@ -36,11 +36,8 @@ AttributeDomain to_domain(int d, const char* what)
 // Checks the struct and its pointers, then validates the arrays it points to.
 MeshInput mesh_input(const ndfb_mesh* m, NgonPolicy ngons)
 {
-    require(m != nullptr, "mesh is null");
     // Every field of ABI 1's ndfb_mesh is needed: a shorter struct cannot be read in full.
-    require(m->struct_size >= offsetof(ndfb_mesh, uv_domain) + sizeof(m->uv_domain) &&
-                m->struct_size <= sizeof(ndfb_mesh),
-            "mesh.struct_size is not set: call ndfb_mesh_init first");
+    require_struct_size(m, "mesh", NDFB_SIZE_THROUGH(ndfb_mesh, uv_domain), "ndfb_mesh_init");
     require(m->face_count > 0, "the mesh has no faces");
     require(m->vertex_count > 0, "the mesh has no vertices");
     require(m->corner_count > 0, "the mesh has no corners");
