@@ -419,19 +419,19 @@ def carried_inputs(principled, current=None):
     for socket in principled.inputs:
         if not socket.enabled or socket.name == "Normal":
             continue
-        if socket.hide_value and material_scan.live_link(held_input(principled, current, socket.name)) is None:
+        if socket.hide_value and material_scan.live_link(held_input(socket, current, socket.name)) is None:
             continue
         carried.append(socket)
     return carried
 
 
-def held_input(principled, current, name):
-    """The socket that holds the Principled's input `name` as the user edits it now: on
-    `current`, the group node of the bake a re-bake replaces, where it has that input; else on the
-    Principled BSDF."""
+def held_input(socket, current, name):
+    """The socket that holds `socket` (a Principled input, or the Normal Map's Strength) as the
+    user edits it now: `current`'s input `name` where `current`, the group node of the bake a
+    re-bake replaces, has one; else `socket` itself."""
     if current is not None and name in current.inputs:
         return current.inputs[name]
-    return principled.inputs[name]
+    return socket
 
 
 def _value(socket):
@@ -554,7 +554,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     for socket in carried:
         iface = _add_socket(tree, "INPUT", socket.bl_idname, socket.name)
         try:
-            iface.default_value = _value(held_input(principled, current, socket.name))
+            iface.default_value = _value(held_input(socket, current, socket.name))
         except (AttributeError, TypeError):
             pass
     strength = _add_socket(tree, "INPUT", "NodeSocketFloat", "Normal Strength")
@@ -960,8 +960,7 @@ def _wire_group_node(material_tree, node, group_tree, principled, normal_map, im
     node.parent = placed.parent
     for source, pairs in _shared_inputs(node, principled, normal_map):
         for i, j in pairs.items():  # a re-bake's as the node it replaces holds them (held_input)
-            held = replacing.inputs.get(node.inputs[j].name) if replacing is not None else None
-            _copy_input(links, held if held is not None else source.inputs[i], node.inputs[j])
+            _copy_input(links, held_input(source.inputs[i], replacing, node.inputs[j].name), node.inputs[j])
     if "Vector" in node.inputs:  # made only where the texture's Vector has a live link
         links.new(material_scan.live_link(image_texture.inputs["Vector"]).from_socket, node.inputs["Vector"])
 
