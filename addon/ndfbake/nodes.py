@@ -778,15 +778,21 @@ def insert_group_node(material_tree, group_tree, principled, normal_map, image_t
     links as (to_node, to_socket identifier, muted), and the added output's name ("" if none), for
     revert."""
     node = material_tree.nodes.new("ShaderNodeGroup")
-    bypassed = []
+    moved = []
     try:
-        _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture, bypassed)
+        _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture, moved)
         carry_animation(material_tree, principled, node, normal_map)
-        return node, bypassed, add_eevee_output(material_tree, node, bypassed)
+        return node, _bsdf_links(moved), add_eevee_output(material_tree, node, _bsdf_links(moved))
     except Exception:
-        remove_group_node(material_tree, node.name, principled.name, bypassed, keep_edits=False,
+        remove_group_node(material_tree, node.name, principled.name, _bsdf_links(moved), keep_edits=False,
                           normal_map_name=normal_map.name)
         raise
+
+
+def _bsdf_links(moved):
+    """The moved links (_wire_group_node) that leave the BSDF output, as (to_node name, to_socket
+    identifier, muted): the links a bake bypasses, as its record keeps them."""
+    return [(to_node, identifier, muted) for name, to_node, identifier, muted in moved if name == "BSDF"]
 
 
 # A re-bake's group node's name until the one it replaces goes (then it is named as a first bake's):
@@ -810,8 +816,7 @@ class Replacement:
 
     @property
     def bypassed(self):
-        """The moved links that leave the BSDF output, as a bake record keeps them."""
-        return [(to_node, identifier, muted) for name, to_node, identifier, muted in self.moved if name == "BSDF"]
+        return _bsdf_links(self.moved)
 
 
 def replace_group_node(material_tree, group_tree, principled, normal_map, image_texture, old, eevee_output=""):
@@ -835,7 +840,7 @@ def replace_group_node(material_tree, group_tree, principled, normal_map, image_
     replacement.node = node.name
     try:
         _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture,
-                         [], replacing=old, moved=replacement.moved)
+                         replacement.moved, replacing=old)
     except Exception:
         undo_replacement(material_tree, replacement)
         raise
@@ -940,12 +945,13 @@ def add_eevee_output(material_tree, node, bypassed):
     return eevee.name
 
 
-def _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture, bypassed,
-                     replacing=None, moved=None):
-    """Sets up the group node and moves onto it the links leaving the Principled's BSDF output
-    (recorded in `bypassed`); for a re-bake, the links leaving the shader outputs of `replacing`,
-    the group node it replaces, whose inputs it takes (held_input), each recorded in `moved` as
-    (output name, to_node name, to_socket identifier, muted) as it moves."""
+def _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture, moved,
+                     replacing=None):
+    """Sets up the group node and moves onto it the links leaving the Principled's BSDF output;
+    for a re-bake, the links leaving the shader outputs of `replacing`, the group node it
+    replaces, whose inputs it takes (held_input). Each link is recorded in `moved` as (output
+    name, to_node name, to_socket identifier, muted) as it moves, so that a failure part way
+    can put back what moved."""
     links = material_tree.links
     node.node_tree = group_tree
     if replacing is None:  # a re-bake's node is named already (replace_group_node)
@@ -969,10 +975,7 @@ def _wire_group_node(material_tree, node, group_tree, principled, normal_map, im
     for name, source in sources:
         for link in list(source.links):
             to_socket, muted = link.to_socket, bool(link.is_muted)
-            if name == "BSDF":
-                bypassed.append((link.to_node.name, to_socket.identifier, muted))
-            if moved is not None:
-                moved.append((name, link.to_node.name, to_socket.identifier, muted))
+            moved.append((name, link.to_node.name, to_socket.identifier, muted))
             links.remove(link)
             links.new(node.outputs[name], to_socket).is_muted = muted
 
