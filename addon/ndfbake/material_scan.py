@@ -188,6 +188,14 @@ def clear_roles(tree, key):
             del node[ROLE_KEY]
 
 
+def rekey_roles(tree, keys, new_key):
+    """Gives the roles of the bakes whose group node was made as one of `keys` the key `new_key`."""
+    for node in tree.nodes:
+        key = role_key(node)
+        if key and key in keys:
+            node[ROLE_KEY] = node_role(str(node[ROLE_KEY]).partition(":")[0], new_key)
+
+
 def record(material):
     """The bake record stored on the material (a dict), or None."""
     import json

@@ -899,10 +899,7 @@ def commit_replacement(material_tree, replacement):
     node_animation.remove_node(material_tree, old)
     new_key = node.name
     node.name = "ndfbake"  # as _wire_group_node names a first bake's (made unique by Blender)
-    for marked in nodes:
-        role, _, key = str(marked.get(material_scan.ROLE_KEY, "")).partition(":")
-        if key and key in (new_key, old_key):
-            marked[material_scan.ROLE_KEY] = material_scan.node_role(role, node.name)
+    material_scan.rekey_roles(material_tree, (new_key, old_key), node.name)
     if replacement.eevee_output:  # (a record older than roles gave it none)
         nodes[replacement.eevee_output][material_scan.ROLE_KEY] = material_scan.node_role("eevee_output", node.name)
     return node
