@@ -115,12 +115,6 @@ def _trace(socket):
     return None, None, None
 
 
-def muted_link(socket):
-    """The muted link on the way to `socket` through reroutes, or None: what cuts a chain that
-    upstream() does not follow."""
-    return _trace(socket)[2]
-
-
 def upstream(socket):
     """The node and output socket feeding `socket`, through reroutes; (None, None) if unlinked or
     cut by a muted link (a muted link is no link: Blender renders as if it were not there)."""
@@ -321,13 +315,11 @@ def scan(material):
 
     normal_maps, muted = [], []
     for p in principled:
-        node, _ = upstream(p.inputs["Normal"])
-        cut = muted_link(p.inputs["Normal"])
+        node, _, cut = _trace(p.inputs["Normal"])
         if node is None and cut is not None and cut.from_node.bl_idname == "ShaderNodeNormalMap":
             muted.append("the link from '%s' to '%s'" % (cut.from_node.name, p.name))
         if node is not None and node.bl_idname == "ShaderNodeNormalMap":
-            texture, _ = upstream(node.inputs["Color"])
-            cut = muted_link(node.inputs["Color"])
+            texture, _, cut = _trace(node.inputs["Color"])
             if node.mute or (texture is not None and texture.mute):
                 muted.append(node.name if node.mute else texture.name)
             elif texture is None and cut is not None:
