@@ -33,8 +33,8 @@ BSDF is normalized about its own normal, and so must the lobe that stands for th
 a white furnace (Cycles, bumps map, roughness 0.15, view from above): 0.885 of the reference with
 the amplitude, 1.002 without (tests/blender/test_addon_render.py checks the furnace). The lobes
 use Multiscatter GGX where the original uses GGX and does not transmit (see _lobe_bsdf). Lobes
-are summed with weights α_j by a chain of Mix Shader nodes, factor α_k / (α_0 + … + α_k), which
-also renormalizes the weights where filtering leaves Σα ≠ 1. Every other Principled input
+are summed with weights α_j (each a Mix Shader of factor α_j, then Add Shader nodes; see
+_weighted_sum for why not a chain of mixes). Every other Principled input
 (linked or not) is carried over through the group's inputs. A material whose fit needs one lobe
 gets a one-lobe group (no mix chain): the group is built for the lobe slots the bake wrote.
 
@@ -623,10 +623,9 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
             shaders[output].append(bsdf.outputs["BSDF"])
         weights.append(dec.outputs["Weight"])
 
-    factors = _mix_factors(tree, weights)
-    narrowed = _mix_chain(tree, shaders[EEVEE_BSDF], factors, -500)
+    narrowed = _weighted_sum(tree, shaders[EEVEE_BSDF], weights, -500)
     tree.links.new(narrowed, gout.inputs[EEVEE_BSDF])
-    tree.links.new(_mix_chain(tree, shaders["BSDF"], factors, -200) if cycles_lobes == WIDENED else narrowed,
+    tree.links.new(_weighted_sum(tree, shaders["BSDF"], weights, -200) if cycles_lobes == WIDENED else narrowed,
                    gout.inputs["BSDF"])
     return tree
 
@@ -672,27 +671,33 @@ def transmits(node):
     return False
 
 
-def _mix_factors(tree, weights):
-    """Σ_j α_j·BSDF_j / Σ_j α_j as a chain of mixes takes, at step k ≥ 1, the factor
-    α_k / (α_0 + … + α_k); this also renormalizes the weights where filtering leaves Σα ≠ 1."""
-    factors, total = [], weights[0]
-    for k in range(1, len(weights)):
-        x = 400 + 200 * k
-        total = _math(tree, "ADD", total, weights[k], location=(x, 300))
-        factors.append(_math(tree, "DIVIDE", weights[k], total, location=(x, 150)))
-    return factors
-
-
-def _mix_chain(tree, shaders, factors, y):
-    shader = shaders[0]
-    for k in range(1, len(shaders)):
+def _weighted_sum(tree, shaders, weights, y):
+    """Σ_j α_j·BSDF_j: lobe j through a Mix Shader of factor α_j with nothing in its other input
+    (the closure weighted α_j), the lobes then added. Each weight is read in its own lobe's branch
+    only: Cycles' SVM keeps every value that two closure branches share on its stack (255 floats)
+    until the whole tree is done, and a chain of mixes with factors α_k / (α_0 + … + α_k) made
+    each lobe's texture lookups shared; at eight lobes the stack overflowed and Cycles drew the
+    material black. No renormalization is needed: the bake writes weights that sum to 1 per
+    texel, and every filter between them (MIP levels, bilinear taps, the blend of two levels) is
+    a convex combination, which keeps the sum."""
+    if len(shaders) == 1:
+        return shaders[0]
+    total = None
+    for j, (shader, weight) in enumerate(zip(shaders, weights)):
+        x = 400 + 200 * j
         mix = tree.nodes.new("ShaderNodeMixShader")
-        mix.location = (400 + 200 * k, y)
-        tree.links.new(factors[k - 1], mix.inputs["Fac"])
-        tree.links.new(shader, mix.inputs[1])
-        tree.links.new(shaders[k], mix.inputs[2])
-        shader = mix.outputs["Shader"]
-    return shader
+        mix.location = (x, y)
+        tree.links.new(weight, mix.inputs["Fac"])
+        tree.links.new(shader, mix.inputs[2])
+        if total is None:
+            total = mix.outputs["Shader"]
+            continue
+        add = tree.nodes.new("ShaderNodeAddShader")
+        add.location = (x + 100, y - 150)
+        tree.links.new(total, add.inputs[0])
+        tree.links.new(mix.outputs["Shader"], add.inputs[1])
+        total = add.outputs["Shader"]
+    return total
 
 
 def drive_lod_inputs(node, scene, camera_object):

@@ -177,8 +177,8 @@ def _lobe_roughness_sources(tree, output):
     found, stack = {}, [tree.nodes["Group Output"].inputs[output].links[0].from_node]
     while stack:
         node = stack.pop()
-        if node.bl_idname == "ShaderNodeMixShader":
-            stack += [link.from_node for socket in node.inputs[1:] for link in socket.links]
+        if node.bl_idname in ("ShaderNodeMixShader", "ShaderNodeAddShader"):
+            stack += [link.from_node for socket in node.inputs if socket.type == "SHADER" for link in socket.links]
         else:
             found[node.name] = node.inputs["Roughness"].links[0].from_node.name
     return found
