@@ -33,7 +33,6 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import demo_scene  # noqa: E402
 import image_error  # noqa: E402
 
-WORLDS = "/usr/share/blender/datafiles/studiolights/world"
 SEEDS = (0, 2, 3)
 REGIONS = ("ground_far", "spheres_far")
 # A sun is the few pixels above SUN_THRESHOLD of the brightest (then the looser fallback); more
@@ -107,8 +106,7 @@ def use_variant(scene, variant):
 
 
 def study(out, world, sun_lamp, reference_samples, converged_samples, variants, width, height):
-    demo_scene.WORLD_IMAGE = os.path.join(WORLDS, world + ".exr")
-    info = demo_scene.build_scene(out, width, height)
+    info = demo_scene.build_scene(out, width, height, world=world)
     scene = bpy.context.scene
     lamp = split_sun(scene) if sun_lamp else None
     if sun_lamp:
@@ -153,7 +151,7 @@ def main():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(prog="cycles_noise_study.py")
     parser.add_argument("--out", required=True)
-    parser.add_argument("--world", default="sunset")
+    parser.add_argument("--world", default=demo_scene.DEFAULT_WORLD, choices=demo_scene.world_names())
     parser.add_argument("--sun-lamp", action="store_true")
     parser.add_argument("--reference-samples", type=int, default=512)
     parser.add_argument("--converged-samples", type=int, default=256)
