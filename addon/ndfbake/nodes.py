@@ -35,7 +35,8 @@ the amplitude, 1.002 without (tests/blender/test_addon_render.py checks the furn
 use Multiscatter GGX where the original uses GGX and does not transmit (see _lobe_bsdf). Lobes
 are summed with weights α_j (each a Mix Shader of factor α_j, then Add Shader nodes; see
 _weighted_sum for why not a chain of mixes). Every other Principled input
-(linked or not) is carried over through the group's inputs. A material whose fit needs one lobe
+(linked or not) is carried over through the group's inputs; the emission is drawn once beside
+the lobes (_emission). A material whose fit needs one lobe
 gets a one-lobe group (no mix chain): the group is built for the lobe slots the bake wrote.
 
 The group has two shader outputs: BSDF, the lobes above (Cycles, and both engines where the
@@ -81,6 +82,8 @@ PRINCIPLED_SETTINGS = ("distribution", "subsurface_method")
 
 # Principled inputs the lobe group computes itself rather than passing through.
 COMPUTED_INPUTS = {"Normal", "Roughness"}
+# Principled inputs the group draws once, beside the lobes, rather than in every lobe (_emission).
+EMISSION_INPUTS = {"Emission", "Emission Strength"}
 
 
 def osl_status():
@@ -623,11 +626,50 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
             shaders[output].append(bsdf.outputs["BSDF"])
         weights.append(dec.outputs["Weight"])
 
-    narrowed = _weighted_sum(tree, shaders[EEVEE_BSDF], weights, -500)
+    emission = _emission(tree, gin, names, (1000 + 200 * count, -900))
+    narrowed = _plus(tree, _weighted_sum(tree, shaders[EEVEE_BSDF], weights, -500), emission,
+                     (1200 + 200 * count, -500))
     tree.links.new(narrowed, gout.inputs[EEVEE_BSDF])
-    tree.links.new(_weighted_sum(tree, shaders["BSDF"], weights, -200) if cycles_lobes == WIDENED else narrowed,
-                   gout.inputs["BSDF"])
+    widened = narrowed
+    if cycles_lobes == WIDENED:
+        widened = _plus(tree, _weighted_sum(tree, shaders["BSDF"], weights, -200), emission, (1200 + 200 * count, -200))
+    tree.links.new(widened, gout.inputs["BSDF"])
     return tree
+
+
+def _emission(tree, gin, names, location):
+    """The Principled's emission, drawn once: an Emission shader of the carried Color and
+    Strength, weighted by the carried Alpha (a Principled mixes a Transparent BSDF over all it
+    draws, its emission too). Every lobe drawing α_j of it would sum to the same light, but in
+    Cycles each lobe's Principled then grows its own emission branch, which costs about 32
+    floats of the 255-float shader stack per lobe where Emission is linked (measured with
+    Cycles' --debug-cycles summary: 134 at 4 lobes, 230 at 7; 8 overflowed, drawing the
+    material black). None where the Principled has no Emission input."""
+    if not EMISSION_INPUTS <= names:
+        return None
+    node = tree.nodes.new("ShaderNodeEmission")
+    node.name = node.label = "Emission"
+    node.location = location
+    tree.links.new(gin.outputs["Emission"], node.inputs["Color"])
+    tree.links.new(gin.outputs["Emission Strength"], node.inputs["Strength"])
+    if "Alpha" not in names:
+        return node.outputs["Emission"]
+    alpha = tree.nodes.new("ShaderNodeMixShader")
+    alpha.name = alpha.label = "Emission Alpha"
+    alpha.location = (location[0] + 200, location[1])
+    tree.links.new(gin.outputs["Alpha"], alpha.inputs["Fac"])
+    tree.links.new(node.outputs["Emission"], alpha.inputs[2])
+    return alpha.outputs["Shader"]
+
+
+def _plus(tree, shader, extra, location):
+    if extra is None:
+        return shader
+    add = tree.nodes.new("ShaderNodeAddShader")
+    add.location = location
+    tree.links.new(shader, add.inputs[0])
+    tree.links.new(extra, add.inputs[1])
+    return add.outputs["Shader"]
 
 
 def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location, multiscatter):
@@ -643,9 +685,10 @@ def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location
     bsdf.subsurface_method = principled.subsurface_method
     bsdf.location = location
     for socket in carried:
-        if socket.name in COMPUTED_INPUTS:
+        if socket.name in COMPUTED_INPUTS or socket.name in EMISSION_INPUTS:
             continue
         tree.links.new(gin.outputs[socket.name], bsdf.inputs[socket.identifier])
+    bsdf.inputs["Emission Strength"].default_value = 0.0  # the group emits once (_emission)
     tree.links.new(roughness, bsdf.inputs["Roughness"])
     tree.links.new(normal, bsdf.inputs["Normal"])
     return bsdf
