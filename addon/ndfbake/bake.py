@@ -351,7 +351,7 @@ def _load_lobe_images(material_name, paths, pack, created):
     images = []
     for j, path in enumerate(paths):
         image = bpy.data.images.load(path)
-        image.name = id_names.free(bpy.data.images, material_name, " lobe %d" % j)
+        image.name = id_names.free(bpy.data.images, *nodes.lobe_image_name(material_name, j))
         image[nodes.TAG] = nodes.GROUP_VERSION
         created.append(image.name)
         image.filepath = _relative(path)
@@ -465,7 +465,7 @@ def finish(job):
         for principled_name, normal_map_name, texture_name in job.targets:
             current = replacing.get(principled_name, (None, None))[1]
             groups.append(nodes.build_material_group(
-                "NDFB " + material.name, tree.nodes[principled_name], tree.nodes[normal_map_name],
+                nodes.material_group_name(material.name), tree.nodes[principled_name], tree.nodes[normal_map_name],
                 tree.nodes[texture_name], images, atlas, job.lod, current=current,
                 cycles_lobes=job.settings.cycles_lobes))
         for (principled_name, normal_map_name, texture_name), group in zip(job.targets, groups):
@@ -543,12 +543,12 @@ def _take_names(material, targets, images):
     lobe j", "NDFB <material>", .001… where taken), which the previous bake's, now gone, held
     while both existed."""
     for j, image in enumerate(images):
-        image.name = id_names.free(bpy.data.images, material.name, " lobe %d" % j, image)
+        image.name = id_names.free(bpy.data.images, *nodes.lobe_image_name(material.name, j), own=image)
     for target in targets:
         group = bpy.data.node_groups.get(target["node_group"])
         if group is None:
             continue
-        group.name = id_names.free(bpy.data.node_groups, "NDFB " + material.name, own=group)
+        group.name = id_names.free(bpy.data.node_groups, nodes.material_group_name(material.name), own=group)
         table = nodes.atlas_table(group)  # named after it
         if table is not None:
             table.name = id_names.free(bpy.data.node_groups, *nodes.atlas_table_name(group.name), own=table)

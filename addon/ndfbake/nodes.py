@@ -375,6 +375,16 @@ def bilinear_group():
     return tree
 
 
+def material_group_name(material_name):
+    """The name a bake gives a material's group: "NDFB <material>" (cut to fit, .001… where taken)."""
+    return "NDFB " + material_name
+
+
+def lobe_image_name(material_name, j):
+    """(body, tail) of the name of the image of a material's lobe slot j (id_names): "<material> lobe j"."""
+    return material_name, " lobe %d" % j
+
+
 def atlas_table_name(group_name):
     """(body, tail) of the name of a group's atlas table (id_names): "<group> atlas", the group's
     ".NNN" kept before " atlas", its body cut to fit."""
