@@ -787,13 +787,15 @@ def _shared_inputs(node, principled, normal_map=None):
     return shared
 
 
-def carry_animation(material_tree, principled, node, normal_map):
+def carry_animation(material_tree, principled, node, normal_map, skip=()):
     """Copies the keyframes and drivers of the Principled's and the Normal Map's carried inputs with
     no live link (a muted link is no link) to the group node's inputs that hold those values after
     the bake (_shared_inputs): an animated colour, emission or bump strength goes on animating, and
-    drivers that read those inputs read the node's."""
+    drivers that read those inputs read the node's. Not to the group node's inputs (indices) in
+    `skip`: a re-bake's, whose animation comes from the node it replaces."""
     for source, pairs in _shared_inputs(node, principled, normal_map):
-        unlinked = [(i, j) for i, j in pairs.items() if material_scan.live_link(source.inputs[i]) is None]
+        unlinked = [(i, j) for i, j in pairs.items()
+                    if j not in skip and material_scan.live_link(source.inputs[i]) is None]
         node_animation.copy_input_animation(material_tree, source, node, unlinked, move=False)
 
 
@@ -940,18 +942,17 @@ def commit_replacement(material_tree, replacement):
     that name it), old's EEVEE output's too. Returns the node."""
     nodes = material_tree.nodes
     node, old = nodes[replacement.node], nodes[replacement.old]
+    principled, normal_map = nodes[replacement.principled], nodes[replacement.normal_map]
     old_key = material_scan.role_key(old)
-    pairs = []
-    for source, shared in _shared_inputs(node, nodes[replacement.principled], nodes[replacement.normal_map]):
-        extra = []
-        for i, j in shared.items():
+    carried_by_old, pairs = set(), []
+    for _, shared in _shared_inputs(node, principled, normal_map):
+        for j in shared.values():
             k = old.inputs.find(node.inputs[j].name)
             if k >= 0:
+                carried_by_old.add(j)
                 if material_scan.live_link(old.inputs[k]) is None:
                     pairs.append((k, j))
-            elif material_scan.live_link(source.inputs[i]) is None:  # not carried by old: as a first bake
-                extra.append((i, j))
-        node_animation.copy_input_animation(material_tree, source, node, extra, move=False)
+    carry_animation(material_tree, principled, node, normal_map, skip=carried_by_old)  # the rest: as a first bake
     node_animation.copy_input_animation(material_tree, old, node, pairs, move=True)
     node_animation.remove_node_animation(material_tree, old.name)
     node_animation.remove_node(material_tree, old)
