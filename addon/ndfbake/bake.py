@@ -442,11 +442,7 @@ def finish(job):
     old = material_scan.record(material) or {}
     # The group nodes of the previous bake, by the Principled BSDF they stand for: replaced in place.
     replacing, gone = {}, []
-    for target in old.get("targets", []):
-        key = target.get("group_node", "")
-        node = material_scan.recorded_node(tree, key, material_scan.node_role("group", key))
-        principled = material_scan.recorded_node(tree, target.get("principled", ""),
-                                                 material_scan.node_role("principled", key))
+    for target, principled, node in material_scan.recorded_targets(tree, old):
         if node is not None and principled is not None and node.bl_idname == "ShaderNodeGroup":
             replacing[principled.name] = (target, node)
         else:

@@ -175,6 +175,17 @@ def recorded_node(tree, name, role):
     return None
 
 
+def recorded_targets(tree, rec):
+    """[(target, its Principled BSDF, its group node)] for the targets of bake record `rec`, the
+    nodes found by their roles (recorded_node), None where gone."""
+    found = []
+    for target in rec.get("targets", []):
+        key = target.get("group_node", "")
+        found.append((target, recorded_node(tree, target.get("principled", ""), node_role("principled", key)),
+                      recorded_node(tree, key, node_role("group", key))))
+    return found
+
+
 def clear_roles(tree, key):
     """Takes the roles of the bake whose group node was made as `key` off every node."""
     for node in tree.nodes:
@@ -290,9 +301,7 @@ def scan(material):
     groups = {}  # Principled name: the group node that stands for it since the bake
     if rec:
         principled = []
-        for t in rec.get("targets", []):
-            key = t.get("group_node", "")
-            p = recorded_node(tree, t.get("principled", ""), node_role("principled", key))
+        for t, p, group in recorded_targets(tree, rec):
             if p is None:
                 result.problems.append(Problem(
                     "PRINCIPLED_GONE", "the Principled BSDF '%s' that ndfbake's node group stands in for in material "
@@ -300,7 +309,6 @@ def scan(material):
                                        "bake again" % (t.get("principled", ""), material.name)))
                 return result
             principled.append(p)
-            group = recorded_node(tree, key, node_role("group", key))
             if group is not None and "Roughness" in group.inputs:
                 groups[p.name] = group
     else:
