@@ -449,9 +449,11 @@ def finish(job):
             gone.append(target)
     if gone:  # group nodes the user deleted: their Principled BSDFs get their links back first
         _remove_nodes(material, {"targets": gone})
-    old_groups = [g for g in (bpy.data.node_groups.get(t.get("node_group", "")) for t in old.get("targets", []))
-                  if g is not None]
-    old_images = [i for i in (bpy.data.images.get(name) for name in old.get("images", [])) if i is not None]
+    # By name: removing a dropped target's nodes below may remove one of these first; the new ones
+    # are given other names while these exist.
+    old_groups = [name for name in (t.get("node_group", "") for t in old.get("targets", []))
+                  if name in bpy.data.node_groups]
+    old_images = [name for name in old.get("images", []) if name in bpy.data.images]
 
     targets, images, created, inserted, replacements = [], [], [], [], []
     groups_before = set(bpy.data.node_groups.keys())
@@ -502,8 +504,8 @@ def finish(job):
         target["group_node"] = nodes.commit_replacement(tree, replacement).name
     baked = {principled_name for principled_name, _, _ in job.targets}  # each replaced above
     _remove_nodes(material, {"targets": [t for name, (t, _) in replacing.items() if name not in baked]})
-    nodes.remove_unused_groups([group.name for group in old_groups])
-    _remove_images([image.name for image in old_images])
+    nodes.remove_unused_groups(old_groups)
+    _remove_images(old_images)
     _take_names(material, targets, images)
     created = [image.name for image in images]
 
