@@ -18,7 +18,8 @@ saved as a .blend in a temporary folder.
   what the scene renders; linked Principled inputs are carried over (muted links muted, and kept on
   Revert); packing works; keyframes and drivers on the Principled's inputs (with their modifiers)
   move to the group node's and go again on Revert; edits on the group node survive a re-bake and
-  Revert; two materials sharing an action bake and revert independently.
+  Revert; two materials sharing an action bake and revert independently; a re-bake that no longer
+  finds one of two normal-map chains reverts that one and re-bakes the other.
 """
 import os
 import re
@@ -903,6 +904,33 @@ def test_a_deleted_principled_is_made_again():
                  % h.differences(before, h.dump_material(material)))
 
 
+def test_a_rebake_without_one_of_two_normal_maps_reverts_that_one():
+    """Two Principled BSDFs baked; the Normal link of one removed: a re-bake bakes the other and
+    gives the first its links back (its group node and node group go before the new bake's
+    groups are named)."""
+    from ndfbake import bake
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory)
+        tree = material.node_tree
+        second = tree.nodes.new("ShaderNodeBsdfPrincipled")
+        second.name = "Second BSDF"
+        mix = tree.nodes.new("ShaderNodeMixShader")
+        tree.links.new(tree.nodes["Principled BSDF"].outputs["BSDF"], mix.inputs[1])
+        tree.links.new(second.outputs["BSDF"], mix.inputs[2])
+        tree.links.new(mix.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+        tree.links.new(tree.nodes["Normal Map"].outputs["Normal"], second.inputs["Normal"])
+        settings = bake.BakeSettings(max_lobes=2, level_of_detail="RENDERER")
+        bake.bake_material(material, settings)
+        h.expect(len(_record(material)["targets"]) == 2, "both Principled BSDFs baked")
+        tree.links.remove(second.inputs["Normal"].links[0])
+        bake.bake_material(material, settings)
+        targets = _record(material)["targets"]
+        h.expect([t["principled"] for t in targets] == ["Principled BSDF"], "re-baked: %s" % targets)
+        h.expect(mix.inputs[2].links[0].from_node == second, "the second BSDF feeds the mix again")
+        h.expect(len(_group_nodes(material)) == 1, "one group node: %s" % _group_nodes(material))
+        h.expect(targets[0]["node_group"] in bpy.data.node_groups, "the record names the new group")
+
+
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_bake_adds_only_the_group_and_bypass, test_failure_while_building_nodes_rolls_back,
@@ -919,4 +947,4 @@ if __name__ == "__main__":
            test_driver_variables_by_socket_name_and_on_the_material_follow,
            test_a_driver_variable_reading_the_strength_follows_it, test_a_linked_action_is_refused,
            test_a_material_changed_during_the_bake_is_not_baked, test_renamed_nodes_are_found_again,
-           test_a_deleted_principled_is_made_again])
+           test_a_deleted_principled_is_made_again, test_a_rebake_without_one_of_two_normal_maps_reverts_that_one])
