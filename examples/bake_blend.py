@@ -113,6 +113,7 @@ def main():
     if not bpy.data.filepath:
         print("bake_blend: open a saved .blend: blender -b FILE.blend --python examples/bake_blend.py", file=sys.stderr)
         return 2
+    linked = []
     if args.material:
         missing = [name for name in args.material if name not in bpy.data.materials]
         if missing:
@@ -121,13 +122,13 @@ def main():
             return 2
         materials = [bpy.data.materials[name] for name in args.material]
     elif args.revert:
-        materials = [m for m in bpy.data.materials if bake.is_baked(m) and m.library is None]
+        baked = [m for m in bpy.data.materials if bake.is_baked(m)]
+        materials = [m for m in baked if m.library is None]
+        # A baked material linked from a library is reverted in its own file (bake.revert refuses
+        # it), as the bake leaves it to its own file: not a failure of this one.
+        linked = sorted(m.name for m in baked if m.library is not None)
     else:
         materials = bake.materials_needing_bake(bpy.context.scene)
-    # A baked material linked from a library is reverted in its own file (bake.revert refuses it),
-    # as the bake leaves it to its own file: not a failure of this one.
-    linked = sorted(m.name for m in bpy.data.materials if m.library is not None and bake.is_baked(m)) \
-        if args.revert and not args.material else []
     linked_note = ("; left %d baked material%s linked from a library alone (revert %s in %s own file): %s"
                    % (len(linked), "" if len(linked) == 1 else "s", "it" if len(linked) == 1 else "them",
                       "its" if len(linked) == 1 else "their", ", ".join(linked))) if linked else ""
