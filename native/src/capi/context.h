@@ -67,6 +67,13 @@ int raw(const Enum& value)
     return v;
 }
 
+// An argument check: where `condition` is false the call fails with NDFB_ERROR_INVALID_ARGUMENT,
+// `message` its last-error text.
+inline void require(bool condition, const std::string& message)
+{
+    if (!condition) throw Error(Status::invalid_argument, message);
+}
+
 // Option structs only ever grow at their end, and `first_size` is the size of the struct as ABI 1
 // first shipped it: those fields every caller has, so they are read without looking at
 // struct_size; fields added since are read only where struct_size covers them. A struct_size

@@ -35,11 +35,6 @@ using namespace ndfbake;
 
 thread_local std::string g_create_error;
 
-void require(bool condition, const std::string& message)
-{
-    if (!condition) throw Error(Status::invalid_argument, message);
-}
-
 // What each option struct held when ABI 1 first shipped (require_struct_size): ndfb_decode_options
 // has never grown; ndfb_fit_options ended at progress_user (max_memory_bytes, max_levels, starts
 // and refine came later), ndfb_write_options at source_name (atlas came later).

@@ -20,11 +20,6 @@ namespace {
 
 using namespace ndfbake;
 
-void require(bool condition, const std::string& message)
-{
-    if (!condition) throw Error(Status::invalid_argument, message);
-}
-
 // `d`: the field as raw() reads it, since the caller's value may be no enumerator.
 AttributeDomain to_domain(int d, const char* what)
 {
