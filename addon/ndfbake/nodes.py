@@ -855,6 +855,7 @@ def _bsdf_links(moved):
     return [(to_node, identifier, muted) for name, to_node, identifier, muted in moved if name == "BSDF"]
 
 
+GROUP_NODE_NAME = "ndfbake"  # a bake's group node's name (made free: group_node_name)
 # A re-bake's group node's name until the one it replaces goes (then it is named as a first bake's):
 # a name no other node tree uses, since renaming a node renames the animation paths naming it in
 # every ID.
@@ -938,8 +939,8 @@ def commit_replacement(material_tree, replacement):
     """Puts a re-bake's group node in the place of the old one for good: the keyframes and drivers
     of old's inputs move to it (and the Principled's or the Normal Map's, as a first bake copies
     them, for inputs old did not carry), old goes, and the new node takes the name a bake gives
-    its node, the roles' key with it (Blender renames the animation paths and driver variables
-    that name it), old's EEVEE output's too. Returns the node."""
+    its node (group_node_name), the roles' key with it (Blender renames the animation paths and
+    driver variables that name it), old's EEVEE output's too. Returns the node."""
     nodes = material_tree.nodes
     node, old = nodes[replacement.node], nodes[replacement.old]
     principled, normal_map = nodes[replacement.principled], nodes[replacement.normal_map]
@@ -957,7 +958,7 @@ def commit_replacement(material_tree, replacement):
     node_animation.remove_node_animation(material_tree, old.name)
     node_animation.remove_node(material_tree, old)
     new_key = node.name
-    node.name = "ndfbake"  # as _wire_group_node names a first bake's (made unique by Blender)
+    node.name = group_node_name(material_tree, node, keys=(new_key, old_key))
     material_scan.rekey_roles(material_tree, (new_key, old_key), node.name)
     if replacement.eevee_output:  # (a record older than roles gave it none)
         nodes[replacement.eevee_output][material_scan.ROLE_KEY] = material_scan.node_role("eevee_output", node.name)
@@ -1001,6 +1002,22 @@ def add_eevee_output(material_tree, node, bypassed):
     return eevee.name
 
 
+def group_node_name(material_tree, node, keys=()):
+    """The name a bake gives its group node `node`: GROUP_NODE_NAME, with .001, .002… where another
+    node has that name or carries it as its role key (material_scan.role_key), other than the
+    `keys` whose roles `node` takes over. The name becomes the key of the node's roles, which must
+    be no other bake's: a group node the user renamed keeps the key it was made with, and its
+    nodes are still in the tree when the new ones are named (a target a re-bake drops goes after
+    commit_replacement); sharing the key, each would be found for the other (recorded_node) and
+    rekeyed with it."""
+    taken = {material_scan.role_key(n) for n in material_tree.nodes if n != node} - set(keys)
+    name, k = GROUP_NODE_NAME, 0
+    while name in taken or material_tree.nodes.get(name) not in (None, node):
+        k += 1
+        name = "%s.%03d" % (GROUP_NODE_NAME, k)
+    return name
+
+
 def _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture, moved,
                      replacing=None):
     """Sets up the group node and moves onto it the links leaving the Principled's BSDF output;
@@ -1011,7 +1028,7 @@ def _wire_group_node(material_tree, node, group_tree, principled, normal_map, im
     links = material_tree.links
     node.node_tree = group_tree
     if replacing is None:  # a re-bake's node is named already (replace_group_node)
-        node.name = "ndfbake"
+        node.name = group_node_name(material_tree, node)
     node[TAG] = GROUP_VERSION
     for role, marked in (("group", node), ("principled", principled), ("normal_map", normal_map)):
         marked[material_scan.ROLE_KEY] = material_scan.node_role(role, node.name)

@@ -19,7 +19,8 @@ saved as a .blend in a temporary folder.
   Revert); packing works; keyframes and drivers on the Principled's inputs (with their modifiers)
   move to the group node's and go again on Revert; edits on the group node survive a re-bake and
   Revert; two materials sharing an action bake and revert independently; a re-bake that no longer
-  finds one of two normal-map chains reverts that one and re-bakes the other.
+  finds one of two normal-map chains reverts that one and re-bakes the other, also where the
+  user renamed that one's group node; a renamed group node keeps its role key from a new one.
 """
 import os
 import re
@@ -904,21 +905,30 @@ def test_a_deleted_principled_is_made_again():
                  % h.differences(before, h.dump_material(material)))
 
 
+def _two_principled_scene(directory):
+    """The bumps scene with a second Principled BSDF beside the first, both taking their Normal
+    from the Normal Map and mixed into the output; returns the material, the second BSDF and the
+    Mix Shader (input 1: the first, input 2: the second)."""
+    material = h.baked_scene(directory)
+    tree = material.node_tree
+    second = tree.nodes.new("ShaderNodeBsdfPrincipled")
+    second.name = "Second BSDF"
+    mix = tree.nodes.new("ShaderNodeMixShader")
+    tree.links.new(tree.nodes["Principled BSDF"].outputs["BSDF"], mix.inputs[1])
+    tree.links.new(second.outputs["BSDF"], mix.inputs[2])
+    tree.links.new(mix.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+    tree.links.new(tree.nodes["Normal Map"].outputs["Normal"], second.inputs["Normal"])
+    return material, second, mix
+
+
 def test_a_rebake_without_one_of_two_normal_maps_reverts_that_one():
     """Two Principled BSDFs baked; the Normal link of one removed: a re-bake bakes the other and
     gives the first its links back (its group node and node group go before the new bake's
     groups are named)."""
     from ndfbake import bake
     with h.scratch_dir() as directory:
-        material = h.baked_scene(directory)
+        material, second, mix = _two_principled_scene(directory)
         tree = material.node_tree
-        second = tree.nodes.new("ShaderNodeBsdfPrincipled")
-        second.name = "Second BSDF"
-        mix = tree.nodes.new("ShaderNodeMixShader")
-        tree.links.new(tree.nodes["Principled BSDF"].outputs["BSDF"], mix.inputs[1])
-        tree.links.new(second.outputs["BSDF"], mix.inputs[2])
-        tree.links.new(mix.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
-        tree.links.new(tree.nodes["Normal Map"].outputs["Normal"], second.inputs["Normal"])
         settings = bake.BakeSettings(max_lobes=2, level_of_detail="RENDERER")
         bake.bake_material(material, settings)
         h.expect(len(_record(material)["targets"]) == 2, "both Principled BSDFs baked")
@@ -930,6 +940,74 @@ def test_a_rebake_without_one_of_two_normal_maps_reverts_that_one():
         h.expect(len(_group_nodes(material)) == 1, "one group node: %s" % _group_nodes(material))
         h.expect(targets[0]["node_group"] in bpy.data.node_groups, "the record names the new group")
 
+
+def test_a_rebake_without_a_renamed_one_of_two_normal_maps():
+    """As above, but the dropped target's group node was renamed ("ndfbake" -> "bar") first: its
+    nodes still carry the key "ndfbake" in their roles when the re-baked target's new node is
+    named, and must not be taken for the new node's (nor it for theirs). The re-baked target keeps
+    a working group node, the dropped one gets its links back, and Revert restores the material."""
+    from ndfbake import bake, material_scan
+    with h.scratch_dir() as directory:
+        material, second, mix = _two_principled_scene(directory)
+        tree = material.node_tree
+        first = tree.nodes["Principled BSDF"]
+        before = h.dump_material(material)
+        settings = bake.BakeSettings(max_lobes=2, level_of_detail="RENDERER")
+        bake.bake_material(material, settings)
+        groups = {t["principled"]: t["group_node"] for t in _record(material)["targets"]}
+        h.expect(groups == {"Principled BSDF": "ndfbake", "Second BSDF": "ndfbake.001"}, "group nodes: %s" % groups)
+        tree.nodes["ndfbake"].name = "bar"
+        tree.links.remove(first.inputs["Normal"].links[0])
+        bake.bake_material(material, settings)
+
+        rec = _record(material)
+        h.expect([t["principled"] for t in rec["targets"]] == ["Second BSDF"], "re-baked: %s" % rec["targets"])
+        (target, principled, node), = material_scan.recorded_targets(tree, rec)
+        h.expect(principled == second, "the record's Principled BSDF: %s" % principled)
+        h.expect(node is not None and node.name == target["group_node"] and node in _group_nodes(material),
+                 "the record's group node %r is not in the material: %s"
+                 % (target["group_node"], [n.name for n in tree.nodes]))
+        h.expect(node.node_tree is not None and node.node_tree.name == target["node_group"],
+                 "the group node draws %s, the record names %s" % (node.node_tree, target["node_group"]))
+        h.expect(mix.inputs[2].links[0].from_node == node, "the new group node does not feed the mix")
+        h.expect(_group_nodes(material) == [node], "group nodes: %s" % [n.name for n in _group_nodes(material)])
+        h.expect(mix.inputs[1].links[0].from_node == first, "the first BSDF does not feed the mix again")
+        h.expect(material_scan.ROLE_KEY not in first.keys(), "the dropped BSDF keeps role %s"
+                 % first.get(material_scan.ROLE_KEY))
+        h.expect(second.get(material_scan.ROLE_KEY) == material_scan.node_role("principled", node.name),
+                 "the second BSDF's role: %s" % second.get(material_scan.ROLE_KEY))
+
+        bake.revert(material)
+        tree.links.new(tree.nodes["Normal Map"].outputs["Normal"], first.inputs["Normal"])
+        h.expect(h.dump_material(material) == before, "material differs after revert: %s"
+                 % h.differences(before, h.dump_material(material)))
+
+
+
+def test_a_deleted_group_node_beside_a_renamed_one_is_baked_again():
+    """Two Principled BSDFs baked; the first's group node renamed ("ndfbake" -> "bar"), the
+    second's deleted: the re-bake's new group node for the second must not take the first's role
+    key with the name "ndfbake", or committing the first's replacement rekeys both. Both targets
+    end with their group nodes, and Revert restores the material."""
+    from ndfbake import bake, material_scan
+    with h.scratch_dir() as directory:
+        material, second, mix = _two_principled_scene(directory)
+        tree = material.node_tree
+        before = h.dump_material(material)
+        settings = bake.BakeSettings(max_lobes=2, level_of_detail="RENDERER")
+        bake.bake_material(material, settings)
+        tree.nodes["ndfbake"].name = "bar"
+        tree.nodes.remove(tree.nodes["ndfbake.001"])
+        bake.bake_material(material, settings)
+        found = material_scan.recorded_targets(tree, _record(material))
+        h.expect([(p.name if p else None, g.name if g else None) for _, p, g in found]
+                 == [(t["principled"], t["group_node"]) for t, _, _ in found]
+                 and len(found) == 2 and len(_group_nodes(material)) == 2,
+                 "the record's nodes: %s; roles: %s" % ([t for t, _, _ in found],
+                                                         [(n.name, n.get(material_scan.ROLE_KEY)) for n in tree.nodes]))
+        bake.revert(material)
+        h.expect(h.dump_material(material) == before, "material differs after revert: %s"
+                 % h.differences(before, h.dump_material(material)))
 
 if __name__ == "__main__":
     h.import_addon()
@@ -947,4 +1025,6 @@ if __name__ == "__main__":
            test_driver_variables_by_socket_name_and_on_the_material_follow,
            test_a_driver_variable_reading_the_strength_follows_it, test_a_linked_action_is_refused,
            test_a_material_changed_during_the_bake_is_not_baked, test_renamed_nodes_are_found_again,
-           test_a_deleted_principled_is_made_again, test_a_rebake_without_one_of_two_normal_maps_reverts_that_one])
+           test_a_deleted_principled_is_made_again, test_a_rebake_without_one_of_two_normal_maps_reverts_that_one,
+           test_a_rebake_without_a_renamed_one_of_two_normal_maps,
+           test_a_deleted_group_node_beside_a_renamed_one_is_baked_again])
