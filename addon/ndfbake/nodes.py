@@ -34,10 +34,10 @@ a white furnace (Cycles, bumps map, roughness 0.15, view from above): 0.885 of t
 the amplitude, 1.002 without (tests/blender/test_addon_render.py checks the furnace). The lobes
 use Multiscatter GGX where the original uses GGX and does not transmit (see _lobe_bsdf). Lobes
 are summed with weights α_j (each a Mix Shader of factor α_j, then Add Shader nodes; see
-_weighted_sum for why not a chain of mixes). Every other Principled input
-(linked or not) is carried over through the group's inputs; the emission is drawn once beside
-the lobes (_emission). A material whose fit needs one lobe
-gets a one-lobe group (no mix chain): the group is built for the lobe slots the bake wrote.
+_weighted_sum for why not a chain of mixes). Every other Principled input (linked or not) is
+carried over through the group's inputs; the emission is drawn once beside the lobes
+(_emission). A material whose fit needs one lobe gets a one-lobe group (nothing to sum): the
+group is built for the lobe slots the bake wrote.
 
 The group has two shader outputs: BSDF, the lobes above (Cycles, and both engines where the
 material's graph is the user's), and EEVEE BSDF, the same lobes narrowed toward grazing views
