@@ -594,7 +594,9 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         uv = _uv_source(tree, gin, has_vector, (-2000, 100))
         taps, blend = _atlas_levels(tree, gin, tree.name, atlas, image_texture.extension == "REPEAT", uv)
 
-    shaders, weights = {"BSDF": [], EEVEE_BSDF: []}, []
+    # The lobe BSDFs each output sums, and the vertical offset of their nodes.
+    offsets = ({"BSDF": 0} if cycles_lobes == WIDENED else {}) | {EEVEE_BSDF: -450}
+    shaders, weights = {output: [] for output in offsets}, []
     for j, image in enumerate(lobe_images):
         y = -900 * j
         if atlas is not None:
@@ -629,57 +631,47 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
             grazing.inputs["Base Roughness"].default_value = dec.inputs["Roughness"].default_value
         tree.links.new(nm.outputs["Normal"], grazing.inputs["Normal"])
 
-        widened = [("BSDF", dec.outputs["Roughness"], 0)] if cycles_lobes == WIDENED else []
-        for output, roughness, dy in widened + [(EEVEE_BSDF, grazing.outputs["Roughness"], -450)]:
-            bsdf = _lobe_bsdf(tree, gin, principled, carried, roughness, nm.outputs["Normal"],
+        roughness = {"BSDF": dec.outputs["Roughness"], EEVEE_BSDF: grazing.outputs["Roughness"]}
+        for output, dy in offsets.items():
+            bsdf = _lobe_bsdf(tree, gin, principled, carried, roughness[output], nm.outputs["Normal"],
                               "Lobe %d %s" % (j, output), (0, y + dy), multiscatter)
             shaders[output].append(bsdf.outputs["BSDF"])
         weights.append(dec.outputs["Weight"])
 
-    emission = _emission(tree, gin, names, (1000 + 200 * count, -900))
-    narrowed = _plus(tree, _weighted_sum(tree, shaders[EEVEE_BSDF], weights, -500), emission,
-                     (1200 + 200 * count, -500))
-    tree.links.new(narrowed, gout.inputs[EEVEE_BSDF])
-    widened = narrowed
-    if cycles_lobes == WIDENED:
-        widened = _plus(tree, _weighted_sum(tree, shaders["BSDF"], weights, -200), emission, (1200 + 200 * count, -200))
-    tree.links.new(widened, gout.inputs["BSDF"])
+    emission = _emission(tree, gin, (1000 + 200 * count, -900))
+    sums = {}
+    for output, lobes in shaders.items():
+        y = {"BSDF": -200, EEVEE_BSDF: -500}[output]
+        add = tree.nodes.new("ShaderNodeAddShader")
+        add.location = (1200 + 200 * count, y)
+        tree.links.new(_weighted_sum(tree, lobes, weights, y), add.inputs[0])
+        tree.links.new(emission, add.inputs[1])
+        sums[output] = add.outputs["Shader"]
+    tree.links.new(sums[EEVEE_BSDF], gout.inputs[EEVEE_BSDF])
+    tree.links.new(sums.get("BSDF", sums[EEVEE_BSDF]), gout.inputs["BSDF"])  # NARROWED: EEVEE's lobes
     return tree
 
 
-def _emission(tree, gin, names, location):
+def _emission(tree, gin, location):
     """The Principled's emission, drawn once: an Emission shader of the carried Color and
     Strength, weighted by the carried Alpha (a Principled mixes a Transparent BSDF over all it
     draws, its emission too). Every lobe drawing α_j of it would sum to the same light, but in
     Cycles each lobe's Principled then grows its own emission branch, which costs about 32
     floats of the 255-float shader stack per lobe where Emission is linked (measured with
     Cycles' --debug-cycles summary: 134 at 4 lobes, 230 at 7; 8 overflowed, drawing the
-    material black). None where the Principled has no Emission input."""
-    if not EMISSION_INPUTS <= names:
-        return None
+    material black). Blender 3.4's Principled always has Emission, Emission Strength and Alpha,
+    and carried_inputs always carries them."""
     node = tree.nodes.new("ShaderNodeEmission")
     node.name = node.label = "Emission"
     node.location = location
     tree.links.new(gin.outputs["Emission"], node.inputs["Color"])
     tree.links.new(gin.outputs["Emission Strength"], node.inputs["Strength"])
-    if "Alpha" not in names:
-        return node.outputs["Emission"]
     alpha = tree.nodes.new("ShaderNodeMixShader")
     alpha.name = alpha.label = "Emission Alpha"
     alpha.location = (location[0] + 200, location[1])
     tree.links.new(gin.outputs["Alpha"], alpha.inputs["Fac"])
     tree.links.new(node.outputs["Emission"], alpha.inputs[2])
     return alpha.outputs["Shader"]
-
-
-def _plus(tree, shader, extra, location):
-    if extra is None:
-        return shader
-    add = tree.nodes.new("ShaderNodeAddShader")
-    add.location = location
-    tree.links.new(shader, add.inputs[0])
-    tree.links.new(extra, add.inputs[1])
-    return add.outputs["Shader"]
 
 
 def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location, multiscatter):
