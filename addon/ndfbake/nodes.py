@@ -1002,12 +1002,10 @@ def group_node_name(material_tree, node, keys=()):
     nodes are still in the tree when the new ones are named (a target a re-bake drops goes after
     commit_replacement); sharing the key, each would be found for the other (recorded_node) and
     rekeyed with it."""
-    taken = {material_scan.role_key(n) for n in material_tree.nodes if n != node} - set(keys)
-    name, k = GROUP_NODE_NAME, 0
-    while name in taken or material_tree.nodes.get(name) not in (None, node):
-        k += 1
-        name = "%s.%03d" % (GROUP_NODE_NAME, k)
-    return name
+    taken = {n.name: n for n in material_tree.nodes}
+    taken.update((material_scan.role_key(n), None) for n in material_tree.nodes
+                 if n != node and material_scan.role_key(n) not in keys)
+    return id_names.free(taken, GROUP_NODE_NAME, own=node)
 
 
 def _wire_group_node(material_tree, node, group_tree, principled, normal_map, image_texture, moved,
