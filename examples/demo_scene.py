@@ -518,7 +518,7 @@ def bake_all(scene, max_lobes=MAX_LOBES, **settings):
 
 
 def run_demo(out, width=320, height=180, reference_samples=256, samples=16, eevee_samples=64,
-             eevee_reference_samples=None, world=DEFAULT_WORLD, cycles_lobes=None, log=print):
+             eevee_reference_samples=None, world=DEFAULT_WORLD, cycles_lobes="WIDENED", log=print):
     """Builds, renders, bakes, renders, measures; writes DIR's files and returns the report."""
     started = time.perf_counter()
     out = os.path.abspath(out)
@@ -542,7 +542,7 @@ def run_demo(out, width=320, height=180, reference_samples=256, samples=16, eeve
     images, info = render_plain(scene, renders, scene_info["materials"], reference_samples, samples,
                                 eevee_samples, eevee_reference_samples, log)
     start = time.perf_counter()
-    bakes = bake_all(scene, **({} if cycles_lobes is None else {"cycles_lobes": cycles_lobes}))
+    bakes = bake_all(scene, cycles_lobes=cycles_lobes)
     bake_seconds = time.perf_counter() - start
     lines = ["  %s %s: %s" % ("baked" if "summary" in b else "FAILED", b["material"],
                               b.get("summary") or "[%s] %s" % (b.get("error"), b.get("message"))) for b in bakes]
@@ -595,8 +595,8 @@ def _arguments():
     parser.add_argument("--eevee-reference-samples", type=int, default=None,
                         help="EEVEE TAA samples of the supersampled reference (default: 1024 / factor², at least 16)")
     parser.add_argument("--world", default=DEFAULT_WORLD, choices=world_names(), help="Blender's studio world")
-    parser.add_argument("--cycles-lobes", choices=("widened", "narrowed"),
-                        help="the bake's Cycles Lobes setting (default: the add-on's)")
+    parser.add_argument("--cycles-lobes", choices=("widened", "narrowed"), default="widened",
+                        help="the bake's Cycles Lobes setting")
     parser.add_argument("--library", help="libndfbake.so (default $NDFBAKE_LIBRARY or build/native/libndfbake.so)")
     return parser.parse_args(argv)
 
@@ -612,7 +612,7 @@ def main():
         return 1
     report = run_demo(args.out, args.width, args.height, args.reference_samples, args.samples,
                       args.eevee_samples, args.eevee_reference_samples, args.world,
-                      args.cycles_lobes and args.cycles_lobes.upper())
+                      args.cycles_lobes.upper())
     failed = [b for b in report["bakes"] if "error" in b]
     return 1 if failed else 0
 
