@@ -126,16 +126,14 @@ def test_image_error_against_references():
         h.expect(all("error" not in b for b in rebakes), "a Narrowed re-bake failed: %s" % rebakes)
         converged["narrowed"] = demo_scene.render(scene, "CYCLES", os.path.join(renders, "narrowed.exr"),
                                                   CONVERGED_SAMPLES, seed=5)
+        errors = image_error.compare(converged, images["cycles_reference"], {r: masks[r] for r in REGIONS})
         off = {}
-        for region in REGIONS:
-            m = masks[region]
-            reference = image_error.mean_luminance(images["cycles_reference"], m)
-            for lobes, pixels in converged.items():
-                brightness = image_error.mean_luminance(pixels, m) / reference
+        for region, entry in errors.items():
+            for lobes in converged:
+                brightness = entry[lobes]["mean"] / entry["reference"]["mean"]
                 off[lobes, region] = abs(brightness - 1.0)
                 print("  info Cycles %d spp, Cycles Lobes %s, %s: mean luminance %.3fx the reference's, block "
-                      "error %.4f" % (CONVERGED_SAMPLES, lobes, region, brightness,
-                                      image_error.block_error(pixels, images["cycles_reference"], m)), flush=True)
+                      "error %.4f" % (CONVERGED_SAMPLES, lobes, region, brightness, entry[lobes]["block"]), flush=True)
         h.expect(off["narrowed", "ground_far"] < off["widened", "ground_far"],
                  "Cycles Lobes Narrowed is no closer to the reference's far-ground brightness (%.3f off) than "
                  "Widened (%.3f off)" % (off["narrowed", "ground_far"], off["widened", "ground_far"]))
