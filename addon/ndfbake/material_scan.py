@@ -176,13 +176,16 @@ def recorded_node(tree, name, role):
 
 
 def recorded_targets(tree, rec):
-    """[(target, its Principled BSDF, its group node)] for the targets of bake record `rec`, the
-    nodes found by their roles (recorded_node), None where gone."""
+    """[(target, its Principled BSDF, its group node, its EEVEE output)] for the targets of bake
+    record `rec`, the nodes found by their roles (recorded_node), None where gone (the EEVEE output
+    also where the bake added none)."""
     found = []
     for target in rec.get("targets", []):
         key = target.get("group_node", "")
+        eevee_output = target.get("eevee_output", "")
         found.append((target, recorded_node(tree, target.get("principled", ""), node_role("principled", key)),
-                      recorded_node(tree, key, node_role("group", key))))
+                      recorded_node(tree, key, node_role("group", key)),
+                      recorded_node(tree, eevee_output, node_role("eevee_output", key)) if eevee_output else None))
     return found
 
 
@@ -301,7 +304,7 @@ def scan(material):
     groups = {}  # Principled name: the group node that stands for it since the bake
     if rec:
         principled = []
-        for t, p, group in recorded_targets(tree, rec):
+        for t, p, group, _ in recorded_targets(tree, rec):
             if p is None:
                 result.problems.append(Problem(
                     "PRINCIPLED_GONE", "the Principled BSDF '%s' that ndfbake's node group stands in for in material "

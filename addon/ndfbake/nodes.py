@@ -872,22 +872,18 @@ class Replacement:
         return _bsdf_links(self.moved)
 
 
-def replace_group_node(material_tree, group_tree, principled, normal_map, image_texture, old, eevee_output=""):
+def replace_group_node(material_tree, group_tree, principled, normal_map, image_texture, old, eevee_output=None):
     """For a re-bake: adds the new group node in the place of `old`, the group node of the bake it
     replaces, with old's inputs (the Principled's inputs as the user edits them now: held_input),
     and moves onto it the links leaving old's shader outputs (the EEVEE output's too). Old stays
     in the tree, untouched otherwise, until commit_replacement; undo_replacement puts the material
     back exactly as it was (as on any error here). Keyframes and drivers of old's inputs, which go
-    by node name, move at the commit, and so does the role of old's EEVEE output, which the bake
-    record calls `eevee_output` (found by its role: material_scan.recorded_node). Returns a
-    Replacement."""
-    key = material_scan.role_key(old) or old.name  # (a record older than roles)
-    eevee = material_scan.recorded_node(material_tree, eevee_output, material_scan.node_role("eevee_output", key)) \
-        if eevee_output else None
+    by node name, move at the commit, and so does the role of `eevee_output`, old's EEVEE output
+    node (material_scan.recorded_targets finds it), or None. Returns a Replacement."""
     replacement = Replacement(node="", old=old.name, principled=principled.name, normal_map=normal_map.name,
                               roles={n.name: n.get(material_scan.ROLE_KEY) for n in (principled, normal_map)},
                               had_animation=material_tree.animation_data is not None,
-                              eevee_output=eevee.name if eevee else "")
+                              eevee_output=eevee_output.name if eevee_output is not None else "")
     node = material_tree.nodes.new("ShaderNodeGroup")
     node.name = REBAKE_NAME
     replacement.node = node.name

@@ -962,7 +962,7 @@ def test_a_rebake_without_a_renamed_one_of_two_normal_maps():
 
         rec = _record(material)
         h.expect([t["principled"] for t in rec["targets"]] == ["Second BSDF"], "re-baked: %s" % rec["targets"])
-        (target, principled, node), = material_scan.recorded_targets(tree, rec)
+        (target, principled, node, _), = material_scan.recorded_targets(tree, rec)
         h.expect(principled == second, "the record's Principled BSDF: %s" % principled)
         h.expect(node is not None and node.name == target["group_node"] and node in _group_nodes(material),
                  "the record's group node %r is not in the material: %s"
@@ -1000,10 +1000,10 @@ def test_a_deleted_group_node_beside_a_renamed_one_is_baked_again():
         tree.nodes.remove(tree.nodes["ndfbake.001"])
         bake.bake_material(material, settings)
         found = material_scan.recorded_targets(tree, _record(material))
-        h.expect([(p.name if p else None, g.name if g else None) for _, p, g in found]
-                 == [(t["principled"], t["group_node"]) for t, _, _ in found]
+        h.expect([(p.name if p else None, g.name if g else None) for _, p, g, _ in found]
+                 == [(t["principled"], t["group_node"]) for t, _, _, _ in found]
                  and len(found) == 2 and len(_group_nodes(material)) == 2,
-                 "the record's nodes: %s; roles: %s" % ([t for t, _, _ in found],
+                 "the record's nodes: %s; roles: %s" % ([t for t, _, _, _ in found],
                                                          [(n.name, n.get(material_scan.ROLE_KEY)) for n in tree.nodes]))
         bake.revert(material)
         h.expect(h.dump_material(material) == before, "material differs after revert: %s"
