@@ -69,6 +69,9 @@ EEVEE_BSDF = "EEVEE BSDF"             # the group's second shader output (narrow
 WIDENED, NARROWED = "WIDENED", "NARROWED"
 TAP_CORNERS = ("00", "10", "01", "11")  # x then y offset of a bilinear tap
 ATLAS_LOOKUP = "Atlas Level %d"       # the material group's atlas-table nodes (0: low, 1: high level)
+# An atlas table's name until bake._take_names names it after its group (atlas_table_name); no
+# "NDFB " name, so that it holds no name a group or table of the bake is to take.
+PROVISIONAL_TABLE_NAME = "ndfbake atlas table"
 GGX_VMF_WIDENING = 1.5                # native/src/math/brdf.h kGgxVmfWidening
 HALF_INV_KAPPA_RESOLUTION = 4e-4      # native/src/io/lobe_exr.h kHalfInvKappaResolution (the add-on
                                       # writes half floats)
@@ -471,7 +474,7 @@ def _uv_source(tree, gin, has_vector, location):
     return coordinates.outputs["UV"]
 
 
-def _atlas_levels(tree, gin, name, atlas, repeat, uv):
+def _atlas_levels(tree, gin, atlas, repeat, uv):
     """The two levels the footprint falls between: per level the taps node, and the blend factor."""
     lod = tree.nodes.new("ShaderNodeGroup")
     lod.node_tree = level_of_detail_group()
@@ -484,7 +487,7 @@ def _atlas_levels(tree, gin, name, atlas, repeat, uv):
     high = _math(tree, "MINIMUM", _math(tree, "ADD", low, 1.0, location=(-1700, 500)), float(len(atlas.levels) - 1),
                  location=(-1550, 500))
     blend = _math(tree, "SUBTRACT", level, low, location=(-1700, 300))
-    table = atlas_table_group(id_names.fit(*atlas_table_name(name)), atlas)
+    table = atlas_table_group(PROVISIONAL_TABLE_NAME, atlas)  # Blender numbers it where taken
     taps = []
     for k, index in enumerate((low, high)):
         lookup = tree.nodes.new("ShaderNodeGroup")
@@ -592,7 +595,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     names = {s.name for s in carried}
     if atlas is not None:
         uv = _uv_source(tree, gin, has_vector, (-2000, 100))
-        taps, blend = _atlas_levels(tree, gin, tree.name, atlas, image_texture.extension == "REPEAT", uv)
+        taps, blend = _atlas_levels(tree, gin, atlas, image_texture.extension == "REPEAT", uv)
 
     # The lobe BSDFs each output sums, and the vertical offset of their nodes.
     offsets = ({"BSDF": 0} if cycles_lobes == WIDENED else {}) | {EEVEE_BSDF: -450}
