@@ -116,19 +116,23 @@ def study(out, world, sun_lamp, reference_samples, converged_samples, variants, 
     reference = demo_scene.render(scene, "CYCLES", path, reference_samples, seed=1)
     rows = []
 
+    regions = {region: masks[region] for region in REGIONS}
+
     def measure(name):
-        fast = [demo_scene.render(scene, "CYCLES", path, 16, seed=s) for s in SEEDS]
+        fast = {"seed %d" % s: demo_scene.render(scene, "CYCLES", path, 16, seed=s) for s in SEEDS}
         converged = demo_scene.render(scene, "CYCLES", path, converged_samples, seed=7)
+        to_reference = image_error.compare(dict(fast, converged=converged), reference, regions)
+        to_converged = image_error.compare(fast, converged, regions)
         for region in REGIONS:
-            m = masks[region]
+            errors, noise = to_reference[region], to_converged[region]
             row = {"variant": name, "region": region,
-                   "rmse16": float(np.mean([image_error.pixel_rmse(i, reference, m) for i in fast])),
-                   "noise": float(np.mean([image_error.pixel_rmse(i, converged, m) for i in fast])),
-                   "bias": image_error.pixel_rmse(converged, reference, m),
-                   "block": float(np.mean([image_error.block_error(i, reference, m) for i in fast])),
-                   "block_converged": image_error.block_error(converged, reference, m),
-                   "mean": image_error.mean_luminance(converged, m),
-                   "reference_mean": image_error.mean_luminance(reference, m)}
+                   "rmse16": float(np.mean([errors[f]["rmse"] for f in fast])),
+                   "noise": float(np.mean([noise[f]["rmse"] for f in fast])),
+                   "bias": errors["converged"]["rmse"],
+                   "block": float(np.mean([errors[f]["block"] for f in fast])),
+                   "block_converged": errors["converged"]["block"],
+                   "mean": errors["converged"]["mean"],
+                   "reference_mean": errors["reference"]["mean"]}
             rows.append(row)
             print("%-14s %-12s rmse16 %.4f noise %.4f bias %.4f block %.4f (converged %.4f) mean %.4f "
                   "(reference %.4f)" % (name, region, row["rmse16"], row["noise"], row["bias"], row["block"],
