@@ -3,15 +3,18 @@ image error of each against a reference (../shared/DESIGN.md, "Ground truth and 
 
     blender -b --factory-startup --python-exit-code 1 --python examples/demo_scene.py -- --out DIR
             [--width W --height H] [--reference-samples N] [--samples N] [--library PATH]
-            [--eevee-samples N] [--eevee-reference-samples N] [--world sunset]
+            [--eevee-samples N] [--eevee-reference-samples N] [--world interior]
             [--cycles-lobes widened|narrowed]
 
 The scene: a 60 m metal ground plane receding from a low camera (its bumps normal map repeats
 every metre, so far away hundreds of texels fall into one pixel) and four metal spheres at 4, 9,
 19 and 33 m, each with its own normal map synthesized by the library (256², tangent space,
 Image Texture -> Normal Map -> Principled BSDF, Non-Color, Linear), glossy (roughness 0.15-0.25),
-lit by Blender's sunset HDR with the low sun ahead, so that the ground shows a glitter path
-(--world picks another of Blender's studio worlds, its brightest spot turned to the same place). A
+lit by Blender's interior HDR with its brightest spot (52 degrees up) ahead: the steep slopes of
+the ground's bumps catch it as a far glitter patch, and the spheres show it as highlights that a
+flattened normal map loses (--world picks another of Blender's studio worlds, its brightest spot
+turned to the same place; under sunset the low sun backlights the far spheres, README "Image
+error"). A
 plain cube (no normal map) and an unrendered normal-mapped material stand in for what a bake must
 leave alone.
 
@@ -23,7 +26,7 @@ report.json, and report.txt (also printed): the bake summaries and the error tab
 The renders: every "plain" image first (EEVEE naive; the EEVEE reference, rendered at F x F the
 resolution with the normal map point-sampled, 'Closest', then box-downsampled; Cycles reference
 with many samples; Cycles naive), then every normal-mapped material is baked with the add-on's
-own code (bake.bake_materials, 4 lobes), then EEVEE and Cycles with ndfbake. F is 8, or less so
+own code (bake.bake_materials, 8 lobes), then EEVEE and Cycles with ndfbake. F is 8, or less so
 that the supersampled render stays at most 1024 pixels wide (the report says which). Errors are
 in linear light (examples/image_error.py) over regions found by casting rays through every pixel
 (2 x 2 per pixel; a pixel counts when all its rays agree, eroded by one pixel): the ground beyond
@@ -54,7 +57,7 @@ if HERE not in sys.path:
 import image_error  # noqa: E402
 
 WORLDS = "/usr/share/blender/datafiles/studiolights/world"   # Blender's studio worlds: <name>.exr
-DEFAULT_WORLD = "sunset"
+DEFAULT_WORLD = "interior"
 BLEND_NAME = "demo_scene.blend"
 MAP_SIZE = 256
 CAMERA_LOCATION = (0.0, -1.0, 1.1)
@@ -74,7 +77,7 @@ SPHERE_TILE = 0.5
 FAR_SPHERES = ("Sphere Far", "Sphere Farthest")
 FAR_GROUND = 8.0                 # metres from the camera: where the "far ground" region begins
 MAX_SUPERSAMPLED_WIDTH = 1024
-MAX_LOBES = 4
+MAX_LOBES = 8                    # the bumps' ring of 45-degree slopes needs them (README "Image error")
 EXPOSURE = -1.5                  # stops, for the PNGs (Filmic); the EXRs are scene-linear
 
 
