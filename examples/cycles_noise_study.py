@@ -3,7 +3,7 @@ converged render, bias of that render against the reference, under a chosen worl
 The README's "Open problems" (image error in Cycles) quotes its figures.
 
     blender -b --factory-startup --python-exit-code 1 --python examples/cycles_noise_study.py -- \
-        --out DIR [--world sunset] [--sun-lamp] [--reference-samples 512] [--converged-samples 256] \
+        --out DIR [--world NAME] [--sun-lamp] [--reference-samples 512] [--converged-samples 256] \
         [--variants widened,narrowed,narrowed-ggx] [--width 128 --height 72] [--library PATH]
 
 The scene is demo_scene.py's, under Blender's studio world --world (its sun or brightest spot 4
