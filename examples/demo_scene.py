@@ -14,9 +14,8 @@ lit by Blender's interior HDR with its brightest spot (52 degrees up) ahead: the
 the ground's bumps catch it as a far glitter patch, and the spheres show it as highlights that a
 flattened normal map loses (--world picks another of Blender's studio worlds, its brightest spot
 turned to the same place; under sunset the low sun backlights the far spheres, README "Image
-error"). A
-plain cube (no normal map) and an unrendered normal-mapped material stand in for what a bake must
-leave alone.
+error"). A plain cube (no normal map) and an unrendered normal-mapped material stand in for what
+a bake must leave alone.
 
 Into DIR: demo_scene.blend (baked at the end; the lobe textures in <material>.ndfbake/ beside
 it), maps/ (the normal maps), renders/*.exr (linear) and *.png (Filmic), montage.png (top row

@@ -15,7 +15,7 @@ normal maps synthesized by the library, the interior HDR, 8 lobes), built at 128
   error must be at most half of the naive normal map's, in both engines. Every figure is printed,
   also for the whole image and the near ground (held to regression bounds). The references are
   checked first: the far ground of the EEVEE reference must be brighter than the naive render
-  (the bumps' steep slopes catch the window light, which MIP-averaged normals lose), and the
+  (the bumps' steep slopes catch the ceiling light, which MIP-averaged normals lose), and the
   naive render must be measurably off. Then Cycles Lobes: re-baked Narrowed, a converged Cycles
   render (128 spp) must bring the far ground's mean luminance closer to the reference's than
   the default Widened does.
@@ -98,7 +98,7 @@ def test_image_error_against_references():
 
         # The references are what the figures stand on: the point-sampled, supersampled EEVEE
         # render must show the far ground brighter than the MIP-mapped naive one (averaged normals
-        # flatten the bumps, whose steep slopes catch the window light), and differ from it.
+        # flatten the bumps, whose steep slopes catch the ceiling light), and differ from it.
         far = errors["eevee"]["ground_far"]
         h.expect(far["reference"]["mean"] > far["naive"]["mean"],
                  "EEVEE reference's far ground (%.4f) is not brighter than the naive render's (%.4f)"
