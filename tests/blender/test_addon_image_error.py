@@ -5,12 +5,12 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 The scene is examples/demo_scene.py's (a receding metal ground plane and four metal spheres, five
 normal maps synthesized by the library, the interior HDR, 8 lobes), built at 128x72:
 
-- test_image_error_against_references, the issue's acceptance (printed and asserted). EEVEE:
-  the reference is the
-  same scene rendered by EEVEE at 8x8 the resolution with the normal maps point-sampled ('Closest',
-  no MIP-mapping), box-downsampled; the figure is the RMS over 4x4-pixel windows of the difference
-  in mean luminance (examples/image_error.py). Cycles: the reference has 512 samples per pixel of
-  the unfiltered maps; naive and ndfbake have 16; the figure is the per-pixel RMSE in linear RGB.
+- test_image_error_against_references, the issue's acceptance (printed and asserted). EEVEE: the
+  reference is the same scene rendered by EEVEE at 8x8 the resolution with the normal maps
+  point-sampled ('Closest', no MIP-mapping), box-downsampled; the figure is the RMS over 4x4-pixel
+  windows of the difference in mean luminance (examples/image_error.py). Cycles: the reference has
+  512 samples per pixel of the unfiltered maps; naive and ndfbake have 16; the figure is the
+  per-pixel RMSE in linear RGB, with the block error printed beside it.
   On each region where filtering matters (the ground beyond 8 m, the two far spheres) ndfbake's
   error must be at most half of the naive normal map's, in both engines. Every figure is printed,
   also for the whole image and the near ground (held to regression bounds). The references are
@@ -51,9 +51,9 @@ REGIONS = ("ground_far", "spheres_far")   # where filtering matters; "all", "gro
 # 0.80. Under the sunset world Cycles misses (0.88 / 1.23: its low sun backlights the far spheres,
 # whose naive error is then the world's sampling noise; README "Image error").
 # The regions shown for information are held to regression bounds with a margin over what they
-# measured (EEVEE 0.511 on the whole image; Cycles 0.311 and 0.243 on the near ground). EEVEE's
-# near ground has none: ndfbake renders it brighter than the reference there (1.06 of naive's
-# block error; README, "Open problems").
+# measured (EEVEE 0.511 on the whole image; Cycles 0.311 on the whole image, 0.243 on the near
+# ground). EEVEE's near ground has none: ndfbake renders it brighter than the reference there
+# (1.06 of naive's block error; README, "Image error").
 REGRESSION_BOUNDS = {("eevee", "all"): 0.7, ("cycles", "all"): 0.5, ("cycles", "ground_near"): 0.5}
 MIN_WINDOWS = 40                          # 4x4 windows a region needs for its figure to mean anything
 CONVERGED_SAMPLES = 128                   # Cycles Lobes compared where noise no longer decides
