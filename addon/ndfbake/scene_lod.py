@@ -17,7 +17,7 @@ STRETCH = 1 takes that long axis: the texel then holds every normal the pixel se
 samples per pixel (Cycles) see one distribution instead of glints from texel to texel, at the
 price of a wider distribution across the short axis, which for the statistically uniform
 normal maps of materials is the same distribution. (STRETCH = 0.5, the geometric mean of the
-axes, gave the same image errors on the demo scene at 128×72.)
+axes, gave the same image errors on the demo scene at 128×72, under sunset with 4 lobes.)
 
 The same formula over the vertices of every object that renders the material, seen from every
 camera in the scene, gives the levels the bake must fit: up to the ceiling of the largest level
