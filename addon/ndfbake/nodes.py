@@ -234,12 +234,13 @@ def grazing_roughness_group():
     which keeps the lobe's facets out of the foreshortening a microfacet lobe applies at grazing
     views and a normal map does not (README, Open problems: bias at grazing views). Measured
     (EEVEE block error against the supersampled reference, ratio to the naive map's; far ground /
-    far spheres; sunset, 4 lobes; demo 320×180 and test 128×72): no narrowing 1.11 / 0.49 and 1.18 / 0.31; α′²(1 + α′² tan²θ)^(−p) with p = 1/3
-    0.40 / 0.48 and 0.55 / 0.34, p = 1/2 0.31 / 0.47 and 0.40 / 0.34, p = 1 (this) 0.25 / 0.44 and
-    0.29 / 0.33, with the far ground's mean luminance 2.11 against the reference's 2.16 (p = 2
-    overshoots it: 2.21). Cycles draws the widened lobes unless the bake's cycles_lobes is
-    NARROWED: there narrowed sun glints at grazing views come out as fireflies at 16 samples per
-    pixel, though converged they are closer (README, open problems)."""
+    far spheres; sunset, 4 lobes; demo 320×180 and test 128×72): no narrowing 1.11 / 0.49 and
+    1.18 / 0.31; α′²(1 + α′² tan²θ)^(−p) with p = 1/3 0.40 / 0.48 and 0.55 / 0.34, p = 1/2
+    0.31 / 0.47 and 0.40 / 0.34, p = 1 (this) 0.25 / 0.44 and 0.29 / 0.33, with the far ground's
+    mean luminance 2.11 against the reference's 2.16 (p = 2 overshoots it: 2.21). Cycles draws the
+    widened lobes unless the bake's cycles_lobes is NARROWED: there narrowed sun glints at grazing
+    views come out as fireflies at 16 samples per pixel, though converged they are closer (README,
+    open problems)."""
     tree = _find_group(GRAZING_GROUP)
     if tree is not None:
         return tree
