@@ -600,9 +600,9 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         uv = _uv_source(tree, gin, has_vector, (-2000, 100))
         taps, blend = _atlas_levels(tree, gin, atlas, image_texture.extension == "REPEAT", uv)
 
-    # The lobe BSDFs each output sums, and the vertical offset of their nodes.
-    offsets = ({"BSDF": 0} if cycles_lobes == WIDENED else {}) | {EEVEE_BSDF: -450}
-    shaders, weights = {output: [] for output in offsets}, []
+    # The outputs whose lobe BSDFs the group builds: (y offset of a lobe's BSDF, y of the sum).
+    layout = ({"BSDF": (0, -200)} if cycles_lobes == WIDENED else {}) | {EEVEE_BSDF: (-450, -500)}
+    shaders, weights = {output: [] for output in layout}, []
     for j, image in enumerate(lobe_images):
         y = -900 * j
         if atlas is not None:
@@ -638,7 +638,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         tree.links.new(nm.outputs["Normal"], grazing.inputs["Normal"])
 
         roughness = {"BSDF": dec.outputs["Roughness"], EEVEE_BSDF: grazing.outputs["Roughness"]}
-        for output, dy in offsets.items():
+        for output, (dy, _) in layout.items():
             bsdf = _lobe_bsdf(tree, gin, principled, carried, roughness[output], nm.outputs["Normal"],
                               "Lobe %d %s" % (j, output), (0, y + dy), multiscatter)
             shaders[output].append(bsdf.outputs["BSDF"])
@@ -647,7 +647,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     emission = _emission(tree, gin, (1000 + 200 * count, -900))
     sums = {}
     for output, lobes in shaders.items():
-        y = {"BSDF": -200, EEVEE_BSDF: -500}[output]
+        y = layout[output][1]
         add = tree.nodes.new("ShaderNodeAddShader")
         add.location = (1200 + 200 * count, y)
         tree.links.new(_weighted_sum(tree, lobes, weights, y), add.inputs[0])
