@@ -4,7 +4,8 @@ The README's "Open problems" (image error in Cycles) quotes its figures.
 
     blender -b --factory-startup --python-exit-code 1 --python examples/cycles_noise_study.py -- \
         --out DIR [--world NAME] [--sun-lamp] [--reference-samples 512] [--converged-samples 256] \
-        [--variants widened,narrowed,narrowed-ggx] [--width 128 --height 72] [--library PATH]
+        [--variants widened,narrowed,narrowed-ggx] [--max-lobes N] [--width 128 --height 72] \
+        [--library PATH]
 
 The scene is demo_scene.py's, under Blender's studio world --world (its sun or brightest spot 4
 degrees right of the view, as in the demo). --sun-lamp moves a compact sun out of the HDR into an
@@ -94,11 +95,12 @@ def split_sun(scene):
             "elevation_degrees": math.degrees(elevation)}
 
 
-def use_variant(scene, variant):
-    """Re-bakes the scene's materials so that Cycles draws them as `variant` says."""
+def use_variant(scene, variant, max_lobes):
+    """Re-bakes the scene's materials with up to `max_lobes` lobes so that Cycles draws them as
+    `variant` says."""
     from ndfbake import nodes
     lobes = nodes.NARROWED if variant.startswith("narrowed") else nodes.WIDENED
-    for outcome in demo_scene.bake_all(scene, cycles_lobes=lobes):
+    for outcome in demo_scene.bake_all(scene, max_lobes=max_lobes, cycles_lobes=lobes):
         if "error" in outcome:
             raise RuntimeError("bake of %s failed: %s" % (outcome["material"], outcome["message"]))
     if variant.endswith("-ggx"):
@@ -110,7 +112,7 @@ def use_variant(scene, variant):
                     node.distribution = "GGX"
 
 
-def study(out, world, sun_lamp, reference_samples, converged_samples, variants, width, height):
+def study(out, world, sun_lamp, reference_samples, converged_samples, variants, width, height, max_lobes):
     info = demo_scene.build_scene(out, width, height, world=world)
     scene = bpy.context.scene
     lamp = split_sun(scene) if sun_lamp else None
@@ -145,7 +147,7 @@ def study(out, world, sun_lamp, reference_samples, converged_samples, variants, 
 
     measure("naive")
     for variant in variants:
-        use_variant(scene, variant)
+        use_variant(scene, variant, max_lobes)
         measure(variant)
     for row in rows:
         if row["variant"] != "naive":
@@ -167,6 +169,8 @@ def main():
     parser.add_argument("--variants", default=",".join(DEFAULT_VARIANTS))
     parser.add_argument("--width", type=int, default=128)
     parser.add_argument("--height", type=int, default=72)
+    parser.add_argument("--max-lobes", type=int, choices=range(1, 9), default=demo_scene.MAX_LOBES,
+                        help="the bakes' maximum lobes (default: the demo's)")
     parser.add_argument("--library")
     args = parser.parse_args(argv)
     variants = [v for v in args.variants.split(",") if v]
@@ -177,7 +181,7 @@ def main():
     bpy.ops.wm.read_factory_settings(use_empty=True)
     demo_scene.import_addon(args.library)
     study(os.path.abspath(args.out), args.world, args.sun_lamp, args.reference_samples, args.converged_samples,
-          variants, args.width, args.height)
+          variants, args.width, args.height, args.max_lobes)
 
 
 if __name__ == "__main__":
