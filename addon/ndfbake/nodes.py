@@ -26,7 +26,8 @@ Per shading point and lobe ("NDFB vMF Lobe" group):
 
 μ_j goes to a tangent-space Normal Map node (same UV map and Strength as the original one) as the
 colour μ·0.5 + 0.5, so the tangent frame is Blender's own in both engines. Lobe j is a copy of the
-original Principled BSDF with that normal and roughness'_j, every other input as the original's.
+original Principled BSDF with that normal and roughness'_j, every other input as the original's
+but the emission, which the group draws once (_emission).
 The library's rule also has an amplitude ∫D_α / ∫D_α' (brdf.h: it keeps the NDF's mass over the
 sphere, which is what its error measure compares); the shader leaves it out: every fine normal's
 BSDF is normalized about its own normal, and so must the lobe that stands for them be. Measured in
@@ -681,7 +682,8 @@ def _emission(tree, gin, location):
 
 
 def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location, multiscatter):
-    """A copy of the original Principled BSDF with the lobe's normal and roughness."""
+    """A copy of the original Principled BSDF with the lobe's normal and roughness, emitting nothing
+    (the group draws the emission once: _emission)."""
     bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
     bsdf.name = bsdf.label = name
     # Multiple scattering: a widened GGX lobe loses the energy of light scattered more than
@@ -954,7 +956,9 @@ def commit_replacement(material_tree, replacement):
     new_key = node.name
     node.name = group_node_name(material_tree, node, keys=(new_key, old_key))
     material_scan.rekey_roles(material_tree, (new_key, old_key), node.name)
-    if replacement.eevee_output:  # (a record older than roles gave it none)
+    # Rekeyed above where it carries old's role; a record older than roles found it by name alone.
+    # "" where the bake added no EEVEE output, or it is gone or ambiguous (recorded_node).
+    if replacement.eevee_output:
         nodes[replacement.eevee_output][material_scan.ROLE_KEY] = material_scan.node_role("eevee_output", node.name)
     return node
 
