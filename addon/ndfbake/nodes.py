@@ -88,6 +88,7 @@ PRINCIPLED_SETTINGS = ("distribution", "subsurface_method")
 COMPUTED_INPUTS = {"Normal", "Roughness"}
 # Principled inputs the group draws once, beside the lobes, rather than in every lobe (_emission).
 EMISSION_INPUTS = {"Emission", "Emission Strength"}
+EMISSION_ALPHA = "Emission Alpha"    # the group's Mix Shader that weights the emission by Alpha
 
 
 def osl_status():
@@ -674,7 +675,7 @@ def _emission(tree, gin, location):
     tree.links.new(gin.outputs["Emission"], node.inputs["Color"])
     tree.links.new(gin.outputs["Emission Strength"], node.inputs["Strength"])
     alpha = tree.nodes.new("ShaderNodeMixShader")
-    alpha.name = alpha.label = "Emission Alpha"
+    alpha.name = alpha.label = EMISSION_ALPHA
     alpha.location = (location[0] + 200, location[1])
     tree.links.new(gin.outputs["Alpha"], alpha.inputs["Fac"])
     tree.links.new(node.outputs["Emission"], alpha.inputs[2])

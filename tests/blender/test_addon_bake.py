@@ -129,6 +129,7 @@ def test_bake_adds_only_the_group_and_bypass():
 
 
 def test_operators_rebake_fewer_lobes_and_revert():
+    from ndfbake import nodes
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         material.ndfbake_settings.max_lobes = 4  # the panel's settings are the user's, not the bake's
@@ -145,7 +146,7 @@ def test_operators_rebake_fewer_lobes_and_revert():
         h.expect(len(groups) == 1, "re-bake left %d group nodes" % len(groups))
         tree = groups[0].node_tree
         h.expect(_principled_count(tree) == 1, "one-lobe group expected")
-        mixes = [n.name for n in tree.nodes if n.bl_idname == "ShaderNodeMixShader" and n.name != "Emission Alpha"]
+        mixes = [n.name for n in tree.nodes if n.bl_idname == "ShaderNodeMixShader" and n.name != nodes.EMISSION_ALPHA]
         h.expect(not mixes, "a one-lobe group mixes no lobes: %s" % mixes)
         rebaked = bpy.path.abspath(_record(material)["folder"])
         h.expect(os.path.basename(rebaked) == "Bumpy~2.ndfbake", "re-baked into %s" % rebaked)
