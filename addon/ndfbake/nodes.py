@@ -736,20 +736,19 @@ def _weighted_sum(tree, shaders, weights, y):
     a convex combination, which keeps the sum."""
     if len(shaders) == 1:
         return shaders[0]
-    total = None
+    weighted = []
     for j, (shader, weight) in enumerate(zip(shaders, weights)):
-        x = 400 + 200 * j
         mix = tree.nodes.new("ShaderNodeMixShader")
-        mix.location = (x, y)
+        mix.location = (400 + 200 * j, y)
         tree.links.new(weight, mix.inputs["Fac"])
         tree.links.new(shader, mix.inputs[2])
-        if total is None:
-            total = mix.outputs["Shader"]
-            continue
+        weighted.append(mix.outputs["Shader"])
+    total = weighted[0]
+    for j, term in enumerate(weighted[1:], 1):
         add = tree.nodes.new("ShaderNodeAddShader")
-        add.location = (x + 100, y - 150)
+        add.location = (500 + 200 * j, y - 150)
         tree.links.new(total, add.inputs[0])
-        tree.links.new(mix.outputs["Shader"], add.inputs[1])
+        tree.links.new(term, add.inputs[1])
         total = add.outputs["Shader"]
     return total
 
