@@ -442,11 +442,12 @@ def finish(job):
     old = material_scan.record(material) or {}
     # The group nodes of the previous bake, by the Principled BSDF they stand for: replaced in place.
     replacing, gone = {}, []
-    for target, principled, node, eevee_output in material_scan.recorded_targets(tree, old):
-        if node is not None and principled is not None and node.bl_idname == "ShaderNodeGroup":
-            replacing[principled.name] = (target, node, eevee_output)
+    for found in material_scan.recorded_targets(tree, old):
+        node = found.group_node
+        if node is not None and found.principled is not None and node.bl_idname == "ShaderNodeGroup":
+            replacing[found.principled.name] = found
         else:
-            gone.append(target)
+            gone.append(found.target)
     if gone:  # group nodes the user deleted: their Principled BSDFs get their links back first
         _remove_nodes(material, {"targets": gone})
     # By name: removing a dropped target's nodes below may remove one of these first; the new ones
@@ -461,7 +462,7 @@ def finish(job):
         images = _load_lobe_images(material.name, paths, job.settings.pack, created)
         groups = []
         for principled_name, normal_map_name, texture_name in job.targets:
-            current = replacing.get(principled_name, (None, None, None))[1]
+            current = replacing[principled_name].group_node if principled_name in replacing else None
             groups.append(nodes.build_material_group(
                 nodes.material_group_name(material.name), tree.nodes[principled_name], tree.nodes[normal_map_name],
                 tree.nodes[texture_name], images, atlas, job.lod, current=current,
@@ -474,9 +475,9 @@ def finish(job):
                             "node_group": group.name, "bypassed": [], "eevee_output": "",
                             "principled_settings": nodes.principled_settings(principled)})
             if principled_name in replacing:
-                _, old_node, old_eevee_output = replacing[principled_name]
-                replacement = nodes.replace_group_node(tree, group, principled, normal_map, texture, old_node,
-                                                       old_eevee_output)
+                previous = replacing[principled_name]
+                replacement = nodes.replace_group_node(tree, group, principled, normal_map, texture,
+                                                       previous.group_node, previous.eevee_output)
                 replacements.append((targets[-1], replacement))
                 node = tree.nodes[replacement.node]
                 targets[-1].update(bypassed=replacement.bypassed, eevee_output=replacement.eevee_output)
@@ -503,7 +504,7 @@ def finish(job):
     for target, replacement in replacements:
         target["group_node"] = nodes.commit_replacement(tree, replacement).name
     baked = {principled_name for principled_name, _, _ in job.targets}  # each replaced above
-    _remove_nodes(material, {"targets": [t for name, (t, _, _) in replacing.items() if name not in baked]})
+    _remove_nodes(material, {"targets": [found.target for name, found in replacing.items() if name not in baked]})
     nodes.remove_unused_groups(old_groups)
     _remove_images(old_images)
     _take_names(material, targets, images)

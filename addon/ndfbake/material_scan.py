@@ -39,6 +39,7 @@ Choices the design leaves open, made here:
 """
 import os
 from dataclasses import dataclass, field
+from typing import Any, NamedTuple
 
 import bpy
 
@@ -175,17 +176,24 @@ def recorded_node(tree, name, role):
     return None
 
 
+class RecordedTarget(NamedTuple):
+    """A target of a bake record with its nodes as found now (recorded_node), None where gone."""
+    target: dict                  # the record's entry
+    principled: Any               # its Principled BSDF
+    group_node: Any
+    eevee_output: Any             # None also where the bake added none
+
+
 def recorded_targets(tree, rec):
-    """[(target, its Principled BSDF, its group node, its EEVEE output)] for the targets of bake
-    record `rec`, the nodes found by their roles (recorded_node), None where gone (the EEVEE output
-    also where the bake added none)."""
+    """[RecordedTarget] for the targets of bake record `rec`, the nodes found by their roles."""
     found = []
     for target in rec.get("targets", []):
         key = target.get("group_node", "")
         eevee_output = target.get("eevee_output", "")
-        found.append((target, recorded_node(tree, target.get("principled", ""), node_role("principled", key)),
-                      recorded_node(tree, key, node_role("group", key)),
-                      recorded_node(tree, eevee_output, node_role("eevee_output", key)) if eevee_output else None))
+        found.append(RecordedTarget(
+            target, recorded_node(tree, target.get("principled", ""), node_role("principled", key)),
+            recorded_node(tree, key, node_role("group", key)),
+            recorded_node(tree, eevee_output, node_role("eevee_output", key)) if eevee_output else None))
     return found
 
 
