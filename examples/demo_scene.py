@@ -55,14 +55,14 @@ if HERE not in sys.path:
     sys.path.insert(0, HERE)
 import image_error  # noqa: E402
 
-WORLDS = "/usr/share/blender/datafiles/studiolights/world"   # Blender's studio worlds: <name>.exr
+WORLDS = bpy.utils.system_resource("DATAFILES", path="studiolights/world")  # Blender's studio worlds: <name>.exr
 DEFAULT_WORLD = "interior"
 BLEND_NAME = "demo_scene.blend"
 MAP_SIZE = 256
 CAMERA_LOCATION = (0.0, -1.0, 1.1)
 CAMERA_PITCH_DOWN = 5.0          # degrees below the horizon
 CAMERA_LENS = 40.0               # mm on a 36 mm sensor: 48.5 degrees across
-SUN_AZIMUTH = 4.0               # degrees right of the view direction
+SUN_AZIMUTH = 4.0               # degrees right of the view direction: the world's brightest spot (its sun)
 GROUND = dict(name="Ground", pattern="bumps", seed=3, roughness=0.2, color=(0.82, 0.82, 0.84),
               size=(30.0, 60.0), start=-2.0, tile=1.0)
 # (object, material, pattern, seed, roughness, base colour, (x, y), radius); all metallic, UV tiles 0.5 m
@@ -163,7 +163,8 @@ def _world(scene, name):
     env = tree.nodes.new("ShaderNodeTexEnvironment")
     env.image = bpy.data.images.load(os.path.join(WORLDS, name + ".exr"), check_existing=True)
     # Blender's equirectangular lookup: u = 0.5 - atan2(y, x) / 2pi. Rotate the world about Z so
-    # that the sun lies SUN_AZIMUTH degrees right of the camera's +Y view direction.
+    # that the sun (the brightest spot: interior's is a ceiling light) lies SUN_AZIMUTH degrees
+    # right of the camera's +Y view direction.
     sun_u = _sun_longitude(env.image)
     want = math.radians(90.0 - SUN_AZIMUTH)          # atan2(y, x) of the wanted direction
     have = (0.5 - sun_u) * 2.0 * math.pi             # atan2(y, x) the image puts the sun at

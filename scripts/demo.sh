@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The main job: installs dependencies, builds, generates a woven-fabric normal map, bakes its
 # filtered lobe pyramid and prints the report's summary; then builds the Blender demo scene
-# (examples/demo_scene.py: a receding metal plane and spheres under an HDR sky), renders it naive
+# (examples/demo_scene.py: a receding metal plane and spheres in an HDR world), renders it naive
 # and with ndfbake in EEVEE and Cycles beside references, and prints the image errors.
 # Output goes to ./demo-output (the scene in ./demo-output/scene: renders, montage.png, report).
 set -euo pipefail

@@ -27,7 +27,7 @@ from bpy_extras import view3d_utils
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import test_addon_helpers as h  # noqa: E402
 
-WORLD = "/usr/share/blender/datafiles/studiolights/world/sunset.exr"
+WORLD = os.path.join(bpy.utils.system_resource("DATAFILES", path="studiolights/world"), "sunset.exr")
 BLOCK = 8
 state = {"step": "start", "deadline": time.time() + 240, "shots": 0}
 
