@@ -984,7 +984,6 @@ def test_a_rebake_without_a_renamed_one_of_two_normal_maps():
                  % h.differences(before, h.dump_material(material)))
 
 
-
 def test_a_deleted_group_node_beside_a_renamed_one_is_baked_again():
     """Two Principled BSDFs baked; the first's group node renamed ("ndfbake" -> "bar"), the
     second's deleted: the re-bake's new group node for the second must not take the first's role
@@ -992,7 +991,7 @@ def test_a_deleted_group_node_beside_a_renamed_one_is_baked_again():
     end with their group nodes, and Revert restores the material."""
     from ndfbake import bake, material_scan
     with h.scratch_dir() as directory:
-        material, second, mix = _two_principled_scene(directory)
+        material, _, _ = _two_principled_scene(directory)
         tree = material.node_tree
         before = h.dump_material(material)
         settings = bake.BakeSettings(max_lobes=2, level_of_detail="RENDERER")
@@ -1009,6 +1008,7 @@ def test_a_deleted_group_node_beside_a_renamed_one_is_baked_again():
         bake.revert(material)
         h.expect(h.dump_material(material) == before, "material differs after revert: %s"
                  % h.differences(before, h.dump_material(material)))
+
 
 if __name__ == "__main__":
     h.import_addon()
