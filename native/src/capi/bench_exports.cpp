@@ -28,30 +28,30 @@ BenchSettings to_bench(const ndfb_bench_options* o)
 {
     // ndfb_bench_options has not grown since ABI 1 first shipped: every field is read.
     require_struct_size(o, "bench options", sizeof(ndfb_bench_options), "ndfb_bench_options_init");
-    if (o->map_count > 0 && !o->map_paths) throw Error(Status::invalid_argument, "bench: map_paths is null");
-    if (o->synthetic_size > 4096) throw Error(Status::invalid_argument, "bench: synthetic_size must be at most 4096");
+    require(o->map_count == 0 || o->map_paths, "bench: map_paths is null");
+    require(o->synthetic_size <= 4096, "bench: synthetic_size must be at most 4096");
     BenchSettings s;
     if (o->synthetic_size > 0)
         for (Pattern p : all_patterns())
             s.maps.emplace_back(pattern_name(p), synthesize(p, int(o->synthetic_size), int(o->synthetic_size)));
     for (size_t i = 0; i < o->map_count; ++i) {
-        if (!o->map_paths[i]) throw Error(Status::invalid_argument, "bench: map path is null");
+        require(o->map_paths[i], "bench: map path is null");
         s.maps.emplace_back(std::filesystem::path(o->map_paths[i]).stem().string(),
                             decode_normal_map(o->map_paths[i], DecodeOptions{}).map);
     }
-    if (s.maps.empty()) throw Error(Status::invalid_argument, "bench: no maps (synthetic_size is 0 and no paths)");
+    require(!s.maps.empty(), "bench: no maps (synthetic_size is 0 and no paths)");
 
     const std::vector<std::string> known = bench_method_names();
     s.methods = split_list(o->methods);
     for (const std::string& m : s.methods)
-        if (std::find(known.begin(), known.end(), m) == known.end() && m.rfind("sh-", 0) != 0)
-            throw Error(Status::invalid_argument, "bench: unknown method '" + m + "'");
+        require(std::find(known.begin(), known.end(), m) != known.end() || m.rfind("sh-", 0) == 0,
+                "bench: unknown method '" + m + "'");
     for (const std::string& b : o->brdfs ? split_list(o->brdfs) : std::vector<std::string>{"ggx:0.3", "ggx:0.6"})
         s.brdfs.push_back(BaseBrdf::parse(b));
     for (const std::string& l : o->levels ? split_list(o->levels) : std::vector<std::string>{"2", "4", "6"}) {
         char* end = nullptr;
         const long level = std::strtol(l.c_str(), &end, 10);
-        if (*end != '\0' || level < 0 || level > 16) throw Error(Status::invalid_argument, "bench: bad level '" + l + "'");
+        require(*end == '\0' && level >= 0 && level <= 16, "bench: bad level '" + l + "'");
         s.levels.push_back(int(level));
     }
     s.texels_per_level = o->texels_per_level > 0 ? int(o->texels_per_level) : 64;
@@ -75,7 +75,7 @@ NDFB_API void ndfb_bench_options_init(ndfb_bench_options* o)
 NDFB_API ndfb_status ndfb_bench(ndfb_context ctx, const ndfb_bench_options* options, const char* out_dir)
 {
     return guarded(ctx, [&] {
-        if (!ctx || !out_dir) throw Error(Status::invalid_argument, "ndfb_bench: ctx and out_dir must not be null");
+        require(ctx && out_dir, "ndfb_bench: ctx and out_dir must not be null");
         const BenchSettings settings = to_bench(options);
         const size_t total = settings.maps.size() * (settings.methods.empty() ? bench_method_names().size()
                                                                               : settings.methods.size());

@@ -82,13 +82,12 @@ inline void require(bool condition, const std::string& message)
 template <typename Options>
 void require_struct_size(const Options* options, const char* name, size_t first_size, const char* init)
 {
-    if (!options) throw Error(Status::invalid_argument, std::string(name) + " is null");
+    require(options, std::string(name) + " is null");
     const uint32_t size = options->struct_size;
-    if (size < first_size || size > sizeof(Options))
-        throw Error(Status::invalid_argument,
-                    std::string(name) + ".struct_size is not set: call " + init + " first (struct_size is " +
-                        std::to_string(size) + "; this library reads " + std::to_string(first_size) + " to " +
-                        std::to_string(sizeof(Options)) + " bytes)");
+    require(size >= first_size && size <= sizeof(Options),
+            std::string(name) + ".struct_size is not set: call " + init + " first (struct_size is " +
+                std::to_string(size) + "; this library reads " + std::to_string(first_size) + " to " +
+                std::to_string(sizeof(Options)) + " bytes)");
 }
 
 // The size of a struct up to and including `field`: the first_size of a struct whose later
