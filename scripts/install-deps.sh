@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Installs what ndfbake needs on Debian 12 from Debian's own packages. Run as root (or via sudo).
+# Installs what ndfbake needs on Debian 12: Debian's own packages, then Blender 4.2, 4.5 and 5.0 as
+# the bpy module from PyPI (scripts/install-bpy.sh; NDFBAKE_BPY_SERIES="4.5" installs fewer, "" none).
+# Run as root (or via sudo).
 set -euo pipefail
 packages=(build-essential cmake pkg-config libopenimageio-dev libopenexr-dev openimageio-tools
-          libgtest-dev python3 blender assimp-testmodels
+          libgtest-dev python3 python3-venv blender assimp-testmodels
           xvfb xauth             # xvfb-run (the window, viewport and GLSL tests); xvfb only recommends
                                  # xauth, and recommends are not installed
           python3-numpy          # the add-on's level of detail, the demo's and tests' image error (Debian's
@@ -20,3 +22,5 @@ if [ ${#missing[@]} -gt 0 ]; then
   apt-get update -qq
   apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
+
+bash "$(dirname "$0")/install-bpy.sh" ${NDFBAKE_BPY_SERIES-4.2 4.5 5.0}
