@@ -23,6 +23,8 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree (addon/, tes
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.normpath(os.path.join(HERE, "..", ".."))
 ADDON_PARENT = os.path.join(REPO, "addon")
+# Blender 4.2 and later install add-ons as extensions (blender_manifest.toml, bl_ext.<repo>.<id>).
+EXTENSIONS = bpy.app.version >= (4, 2, 0)
 
 
 def _script_arguments():
@@ -35,6 +37,15 @@ def arguments():
     library = os.path.abspath(argv[0]) if argv else os.path.join(REPO, "build", "native", "libndfbake.so")
     zip_path = os.path.abspath(argv[1]) if len(argv) > 1 else ""
     return library, zip_path
+
+
+def blender_command(script, *args):
+    """The command that runs `script` in a new background Blender like this one, `args` after
+    `--`: the binary, or this Python where Blender is the bpy module (no binary_path)."""
+    if bpy.app.binary_path:
+        return [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code", "1", "--python", script,
+                "--", *args]
+    return [sys.executable, script, "--", *args]
 
 
 def import_addon(register=True):

@@ -1,20 +1,26 @@
-"""The add-on as users get it: ndfbake-<version>.zip installed through Preferences, the library
+"""The add-on as users get it: installed from its zip the way an artist installs it, the library
 inside it, and one clear message (never a traceback) when the library is missing or unusable.
 
 Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_install.py -- LIB ZIP
+ or: python tests/blender/test_addon_install.py -- LIB ZIP     (Blender as the bpy module)
 
-- The zip holds the add-on's modules and libndfbake.so, and nothing else.
-- bpy.ops.preferences.addon_install + addon_utils.enable (into a temporary script directory)
-  registers it; the library is loaded from the installed folder (no NDFBAKE_LIBRARY); a bake and
-  a revert work through the operators; bl_info's version is the library's; the OSL check says
-  what this build has.
+ZIP is the extension (ndfbake-<version>-linux_x64.zip) in Blender 4.2 and later, the legacy add-on
+(ndfbake-<version>.zip) before.
+- The zip holds the add-on's modules (and, as an extension, blender_manifest.toml) with
+  libndfbake.so and the libraries it bundles, and nothing else.
+- 4.2+: bpy.ops.extensions.package_install_files into a repository of a temporary folder (Get
+  Extensions > Install from Disk); before: bpy.ops.preferences.addon_install + addon_utils.enable
+  into a temporary script directory. The library is loaded from the installed folder (no
+  NDFBAKE_LIBRARY); a bake and a revert work through the operators; the declared version
+  (manifest or bl_info) is the library's; the OSL check says what this build has.
 - In separate Blender processes the installed add-on gets no library, a file that is not a
   library, a library of another ABI (compiled here when a C compiler is available), and a Python
-  without NumPy (Debian's Blender does not depend on it): the add-on still enables, the panel
-  draws the one message, the operator reports it; no traceback. The checkout's add-on folder
-  linked into the scripts path looks for the checkout's build/native/libndfbake.so.
+  without NumPy: the add-on still enables, the panel draws the one message, the operator reports
+  it; no traceback. The checkout's add-on folder linked into the scripts path (or an extension
+  repository) looks for the checkout's build/native/libndfbake.so.
 """
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -25,8 +31,11 @@ import bpy
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import test_addon_helpers as h  # noqa: E402
 
-EXPECTED_FILES = {"__init__.py", "native.py", "material_scan.py", "scene_lod.py", "nodes.py", "node_animation.py", "lobe_folders.py", "id_names.py", "bake.py", "operators.py", "ui.py",
-                  "libndfbake.so"}
+ADDON_SOURCE = os.path.join(h.REPO, "addon", "ndfbake")
+MODULES = {n for n in os.listdir(ADDON_SOURCE) if n.endswith(".py")}
+# The library's bundled dependencies (OpenEXR's): shared objects beside it, found through $ORIGIN.
+BUNDLED_LIBRARY = re.compile(r"lib[A-Za-z0-9_+-]+(-[0-9_]+)?\.so(\.[0-9]+)*$")
+TEST_REPOSITORY = "ndfbake_test"  # the module name of the temporary extension repository
 
 
 def _zip():
@@ -35,40 +44,78 @@ def _zip():
     return zip_path
 
 
-def _install(zip_path, scripts):
-    """Installs and enables the zip into `scripts`/addons as Preferences > Add-ons > Install does."""
+def _add_repository(directory, module=TEST_REPOSITORY):
+    """An extension repository (4.2+) whose packages live in `directory`."""
+    return bpy.context.preferences.extensions.repos.new(name=module, module=module, custom_directory=directory)
+
+
+def _install(zip_path, directory):
+    """Installs and enables the zip into `directory` as an artist does; returns the module and the
+    folder it was installed to."""
     import addon_utils
-    os.makedirs(os.path.join(scripts, "addons"), exist_ok=True)
-    bpy.context.preferences.filepaths.script_directory = scripts
+    if h.EXTENSIONS:
+        repository = _add_repository(directory)
+        result = bpy.ops.extensions.package_install_files(filepath=zip_path, repo=repository.module,
+                                                         enable_on_install=True)
+        h.expect(result == {"FINISHED"}, "package_install_files: %s" % result)
+        name = "bl_ext.%s.ndfbake" % repository.module
+        h.expect(name in bpy.context.preferences.addons, "the extension did not enable")
+        return sys.modules[name], os.path.join(directory, "ndfbake")
+    os.makedirs(os.path.join(directory, "addons"), exist_ok=True)
+    bpy.context.preferences.filepaths.script_directory = directory
     bpy.utils.refresh_script_paths()
     result = bpy.ops.preferences.addon_install(filepath=zip_path, target="PREFS", overwrite=True)
     h.expect(result == {"FINISHED"}, "addon_install: %s" % result)
     module = addon_utils.enable("ndfbake", default_set=True, handle_error=None)
     h.expect(module is not None, "the add-on did not enable")
-    return module
+    return module, os.path.join(directory, "addons", "ndfbake")
+
+
+def _uninstall(module):
+    import addon_utils
+    addon_utils.disable(module.__name__, default_set=True)
+    if h.EXTENSIONS:
+        repos = bpy.context.preferences.extensions.repos
+        repos.remove(repos[TEST_REPOSITORY])
+
+
+def _declared_version(module):
+    """The version the installed package declares: its manifest's (extension) or bl_info's."""
+    if h.EXTENSIONS:
+        import tomllib
+        with open(os.path.join(os.path.dirname(module.__file__), "blender_manifest.toml"), "rb") as f:
+            return tuple(int(x) for x in tomllib.load(f)["version"].split("."))
+    return module.bl_info["version"]
 
 
 def test_zip_holds_the_addon_and_the_library():
     with zipfile.ZipFile(_zip()) as z:
         names = {n for n in z.namelist() if not n.endswith("/")}
-    h.expect({n.split("/", 1)[1] for n in names} == EXPECTED_FILES and all(n.startswith("ndfbake/") for n in names),
-             "zip contents: %s" % sorted(names))
+    if h.EXTENSIONS:  # an extension: its files at the top level
+        files = names
+    else:
+        h.expect(all(n.startswith("ndfbake/") for n in names), "zip contents: %s" % sorted(names))
+        files = {n.split("/", 1)[1] for n in names}
+    expected = MODULES | {"libndfbake.so", "blender_manifest.toml"}
+    h.expect(expected <= files, "missing from the zip: %s" % sorted(expected - files))
+    others = files - expected
+    h.expect(all(BUNDLED_LIBRARY.match(n) for n in others), "unexpected files in the zip: %s" % sorted(others))
+    print("  %d files; bundled libraries: %s" % (len(files), ", ".join(sorted(others)) or "none"))
 
 
 def test_installed_zip_loads_its_own_library_and_bakes():
     os.environ.pop("NDFBAKE_LIBRARY", None)
-    with h.scratch_dir("ndfb-scripts-") as scripts, h.scratch_dir() as directory:
-        module = _install(_zip(), scripts)
-        installed = os.path.join(scripts, "addons", "ndfbake")
+    with h.scratch_dir("ndfb-install-") as target, h.scratch_dir() as directory:
+        module, installed = _install(_zip(), target)
         h.expect(os.path.dirname(os.path.abspath(module.__file__)) == installed, "module from %s" % module.__file__)
         lib = module.native.load()
         h.expect(lib.path == os.path.join(installed, "libndfbake.so"), "library from %s" % lib.path)
         version = tuple(int(x) for x in lib.version.split("."))
-        h.expect(module.bl_info["version"] == version, "bl_info %s vs library %s" % (module.bl_info["version"],
+        h.expect(_declared_version(module) == version, "declared %s vs library %s" % (_declared_version(module),
                                                                                    lib.version))
         available, message = module.nodes.osl_status()
         h.expect(available == bool(bpy.app.build_options.cycles_osl) and "OSL" in message, message)
-        print("  installed %s (library %s); %s" % (installed, lib.version, message))
+        print("  installed %s as %s (library %s); %s" % (installed, module.__name__, lib.version, message))
 
         # A scene built with the installed module (its native.py writes the test normal map).
         sys.modules.setdefault("ndfbake", module)
@@ -84,8 +131,7 @@ def test_installed_zip_loads_its_own_library_and_bakes():
         h.expect(module.bake.is_baked(material), "not baked")
         h.expect(bpy.ops.ndfbake.revert(material="Installed") == {"FINISHED"}, "revert")
         h.expect(h.dump_material(material) == before, "revert did not restore the material")
-        import addon_utils
-        addon_utils.disable("ndfbake", default_set=True)
+        _uninstall(module)
 
 
 # ---- an unusable library, each in its own Blender process ------------------------------------
@@ -116,22 +162,29 @@ class FakeLayout:
         pass
 
 
-def child_case(case):
-    """Runs inside the child Blender: the add-on installed in BLENDER_USER_SCRIPTS has a bad
-    library (or, "linked", is this checkout's folder linked there). Prints 'CHILD OK <message>'
-    when every check holds."""
+def _enable_installed():
+    """In the child: enables the add-on installed in the folder the parent named (an extension
+    repository's folder, 4.2+) or in BLENDER_USER_SCRIPTS (before)."""
     import addon_utils
+    if h.EXTENSIONS:
+        _add_repository(sys.argv[sys.argv.index("--child") + 2])
+        return addon_utils.enable("bl_ext.%s.ndfbake" % TEST_REPOSITORY, default_set=True, handle_error=None)
+    return addon_utils.enable("ndfbake", default_set=True, handle_error=None)
+
+
+def child_case(case):
+    """Runs inside the child Blender: the installed add-on has a bad library (or, "linked", is
+    this checkout's folder linked there). Prints 'CHILD OK <message>' when every check holds."""
     if case == "linked":
-        module = addon_utils.enable("ndfbake", default_set=True, handle_error=None)
+        module = _enable_installed()
         assert module is not None, "the linked add-on did not enable"
-        repo = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))
-        built = os.path.join(repo, "build", "native", "libndfbake.so")
+        built = os.path.join(h.REPO, "build", "native", "libndfbake.so")
         assert built in module.native.candidate_paths(), module.native.candidate_paths()
         print("CHILD OK looks for " + built)
         return
     if case == "numpy":
         sys.modules["numpy"] = None  # `import numpy` now raises ImportError: a Blender without NumPy
-    module = addon_utils.enable("ndfbake", default_set=True, handle_error=None)
+    module = _enable_installed()
     assert module is not None, "the add-on must enable without its library"
     lib, message = module.native.status()
     assert lib is None and message, (lib, message)
@@ -165,16 +218,17 @@ def _fake_abi_library(path):
 def test_unusable_library_gives_one_message():
     zip_path = _zip()
     for case in ("missing", "broken", "abi", "numpy", "linked"):
-        with h.scratch_dir("ndfb-scripts-") as scripts:
-            addons = os.path.join(scripts, "addons")
-            os.makedirs(addons)
+        with h.scratch_dir("ndfb-install-") as target:
+            # Where the package goes: an extension repository's folder, or a scripts path's addons/.
+            packages = target if h.EXTENSIONS else os.path.join(target, "addons")
+            installed = os.path.join(packages, "ndfbake")
+            os.makedirs(packages, exist_ok=True)
             if case == "linked":  # the checkout's add-on folder linked in: it finds the checkout's build
-                repo = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-                os.symlink(os.path.join(repo, "addon", "ndfbake"), os.path.join(addons, "ndfbake"))
+                os.symlink(ADDON_SOURCE, installed)
             else:
                 with zipfile.ZipFile(zip_path) as z:
-                    z.extractall(addons)
-            library = os.path.join(addons, "ndfbake", "libndfbake.so")
+                    z.extractall(installed if h.EXTENSIONS else packages)
+            library = os.path.join(installed, "libndfbake.so")
             if case not in ("numpy", "linked"):  # numpy keeps the library and loses NumPy (child_case)
                 os.remove(library)
             if case == "broken":
@@ -184,11 +238,9 @@ def test_unusable_library_gives_one_message():
                 print("  abi: no C compiler to build a fake library; skipped")
                 continue
             env = {k: v for k, v in os.environ.items() if k != "NDFBAKE_LIBRARY"}
-            env["BLENDER_USER_SCRIPTS"] = scripts
-            proc = subprocess.run(
-                [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
-                 os.path.abspath(__file__), "--", "--child", case],
-                env=env, capture_output=True, text=True, timeout=120)
+            env["BLENDER_USER_SCRIPTS"] = target
+            proc = subprocess.run(h.blender_command(os.path.abspath(__file__), "--child", case, target),
+                                  env=env, capture_output=True, text=True, timeout=120)
             output = proc.stdout + proc.stderr
             h.expect(proc.returncode == 0 and "CHILD OK" in output, "%s: exit %d\n%s" % (case, proc.returncode, output))
             h.expect("Traceback" not in output, "%s: a traceback was printed:\n%s" % (case, output))
