@@ -15,8 +15,14 @@ stage() { echo "== test.sh: $1 ($((SECONDS - start)) s so far)"; }
 
 bash "$root/scripts/install-deps.sh"
 bash "$root/scripts/build.sh"
-stage "ctest (build)"
-(cd "${NDFBAKE_BUILD_DIR:-$root/build}" && ctest --output-on-failure -j "$(nproc)")
+build=${NDFBAKE_BUILD_DIR:-$root/build}
+stage "ctest (build): native tests and Debian's Blender $(blender --version 2>/dev/null | head -1 | cut -d' ' -f2)"
+(cd "$build" && ctest --output-on-failure -j "$(nproc)" -LE 'bpy-')
+# The Blender tests again in each bpy series installed (tests/CMakeLists.txt: NDFBAKE_BPY_SERIES).
+for series in $(cd "$build" && ctest -N --print-labels | sed -n 's/^ *bpy-//p'); do
+  stage "ctest (build): Blender $series (bpy module)"
+  (cd "$build" && ctest --output-on-failure -j "$(nproc)" -L "bpy-$series\$")
+done
 
 if [ "${NDFBAKE_SANITIZE_TESTS:-1}" != 0 ]; then
   # Every test again with ASan + UBSan; any report fails it (tests/CMakeLists.txt sets the
