@@ -22,7 +22,8 @@ are left exactly as they were; the others are still baked and saved), when the .
 be saved, or on an unexpected error; 2 for bad usage (unknown option, a value out of range, a
 material that does not exist, an unsaved .blend).
 
-The add-on is the enabled or installed `ndfbake` if there is one, else this repository's addon/
+The add-on is the enabled or installed ndfbake if there is one (from Blender 4.2 on an extension,
+module `bl_ext.<repository>.ndfbake`; before, a legacy add-on), else this repository's addon/
 folder; the native library is the one inside the add-on folder, or $NDFBAKE_LIBRARY, or
 build/native/libndfbake.so of this checkout (see addon/ndfbake/native.py).
 """
@@ -34,16 +35,21 @@ import time
 import bpy
 
 
+def _is_ndfbake(module_name):
+    """The legacy add-on's module, `ndfbake`, or an extension's, `bl_ext.<repository>.ndfbake`."""
+    return module_name == "ndfbake" or (module_name.startswith("bl_ext.") and module_name.endswith(".ndfbake"))
+
+
 def _import_addon():
-    try:
-        import ndfbake  # an installed add-on (enabled or not) on Blender's module path
-        return ndfbake
-    except ImportError:
-        pass
+    import importlib
+    # An enabled add-on first (extension or legacy), then an installed one, then this checkout's.
+    for name in bpy.context.preferences.addons.keys():
+        if _is_ndfbake(name):
+            return importlib.import_module(name)
     import addon_utils
     for module in addon_utils.modules(refresh=False):
-        if module.__name__ == "ndfbake":
-            return module
+        if _is_ndfbake(module.__name__):
+            return importlib.import_module(module.__name__)
     here = os.path.dirname(os.path.abspath(__file__))
     sys.path.insert(0, os.path.join(here, "..", "addon"))
     import ndfbake
