@@ -170,6 +170,14 @@ NDFB_API void ndfb_context_destroy(ndfb_context ctx);
  * With ctx == NULL: the message of the last failed ndfb_context_create on this thread. */
 NDFB_API const char* ndfb_last_error(ndfb_context ctx);
 NDFB_API const char* ndfb_status_name(ndfb_status status);
+/* Non-zero where the library reads and writes image files (through OpenImageIO): the full library,
+ * which `ndfbake` and the tests use. The Blender add-on's library is built without image files, to
+ * need nothing beyond the C and C++ runtimes and the libraries beside it; it writes the lobe
+ * textures (OpenEXR) and report.json, but ndfb_normal_map_load, ndfb_bake, ndfb_describe_image,
+ * ndfb_normal_map_save, ndfb_bench and a write_options color_path fail there with
+ * NDFB_ERROR_UNSUPPORTED_FORMAT and a message naming what to call instead: decode the image in
+ * the host, then ndfb_normal_map_from_pixels and ndfb_bake_map. */
+NDFB_API int32_t ndfb_has_image_files(void);
 
 NDFB_API void ndfb_decode_options_init(ndfb_decode_options* options);
 NDFB_API void ndfb_fit_options_init(ndfb_fit_options* options);
@@ -230,10 +238,17 @@ NDFB_API ndfb_status ndfb_texel_error(ndfb_context ctx, ndfb_normal_map map, ndf
 NDFB_API ndfb_status ndfb_pyramid_write(ndfb_context ctx, ndfb_pyramid pyramid, ndfb_normal_map map,
                                         const char* out_dir, const ndfb_fit_options* fit_options,
                                         const ndfb_write_options* options);
-/* Decode, fit and write in one call: what `ndfbake bake` and the Blender add-on run. */
+/* Decode, fit and write in one call: what `ndfbake bake` runs. */
 NDFB_API ndfb_status ndfb_bake(ndfb_context ctx, const char* input_path, const char* out_dir,
                                const ndfb_decode_options* decode, const ndfb_fit_options* fit,
                                const ndfb_write_options* write);
+/* ndfb_bake for a map already decoded (ndfb_normal_map_from_pixels, ndfb_synthesize): fit and write
+ * in one call, with ndfb_bake's checks before the fit (out_dir writable, memory, colour image) and
+ * its report (repairs, assumptions and source hash of the map's decode, timings). Progress stages
+ * "fit", "measure", "write"; cancel as ndfb_bake. The files name write->source_name as their
+ * source (default "memory"). What the Blender add-on runs, with pixels Blender decoded. */
+NDFB_API ndfb_status ndfb_bake_map(ndfb_context ctx, ndfb_normal_map map, const char* out_dir,
+                                   const ndfb_fit_options* fit, const ndfb_write_options* write);
 
 /* ---- benchmark ----------------------------------------------------------------------------- */
 typedef struct ndfb_bench_options {

@@ -16,6 +16,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include "io/image_files.h"
 #include "io/lobe_exr.h"
 #include "io/normal_encode.h"
 #include "ndfbake.h"

@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "io/image_files.h"
 #include "io/lobe_exr.h"
 #include "io/normal_encode.h"
 #include "ndfbake.h"

@@ -20,6 +20,7 @@
 #include "error.h"
 #include "io/atomic_file.h"
 #include "io/json_writer.h"
+#include "io/image_files.h"
 #include "io/lobe_exr.h"
 #include "io/normal_decode.h"
 #include "test_support.h"

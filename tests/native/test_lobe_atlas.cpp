@@ -8,6 +8,7 @@
 #include <random>
 
 #include "bake/lobe_atlas.h"
+#include "io/image_files.h"
 #include "io/lobe_exr.h"
 #include "ndfbake.h"
 #include "synth/patterns.h"

@@ -16,7 +16,7 @@
 #include "export/lobe_shader.h"
 #include "io/atomic_file.h"
 #include "io/color_decode.h"
-#include "io/image_read.h"
+#include "io/image_files.h"
 #include "io/json_writer.h"
 #include "ndf/spherical_em.h"
 #include "pyramid/parallel.h"
@@ -440,6 +440,29 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
     return outcome;
 }
 
+namespace {
+
+// The per-lobe colour's image, checked from its header before any fitting: present, readable,
+// of the map's size.
+void check_color_image(const WriteSettings& write, int map_width, int map_height)
+{
+    if (write.color_path.empty()) return;
+    const ImageLayout color = read_image_layout(write.color_path);
+    require_color_size(write.color_path, color.width, color.height, map_width, map_height);
+}
+
+// What every bake does once it has the map: fit its pyramid, then measure and write it.
+BakeOutcome fit_and_write(const DecodeResult& decoded, const std::string& out_dir, const PyramidSettings& settings,
+                          const WriteSettings& write, BakeTimings timings, const StageProgress& progress)
+{
+    const auto start = std::chrono::steady_clock::now();
+    const LobePyramid pyramid = build_lobe_pyramid(decoded.map, settings, [&](double fraction) {
+        return !progress || progress("fit", fraction);
+    });
+    timings.fit = seconds_since(start);
+    return write_pyramid_into(pyramid, decoded, out_dir, settings, write, timings, progress);
+}
+
 BakeOutcome bake_file_into(const std::string& input_path, const std::string& out_dir, const DecodeOptions& decode,
                            const PyramidSettings& settings, const WriteSettings& write, const StageProgress& progress)
 {
@@ -447,41 +470,42 @@ BakeOutcome bake_file_into(const std::string& input_path, const std::string& out
     ensure_writable_directory(out_dir);
     // And on a map too large for the memory allowed, from its header alone. A header the decoder
     // refuses anyway (no pixels, wrong channel count, over max_pixels) gets the decoder's error.
-    {
-        const std::unique_ptr<OIIO::ImageInput> header = open_image(input_path);
-        const OIIO::ImageSpec& spec = header->spec();
-        if (spec.width > 0 && spec.height > 0 && spec.nchannels >= 2 && spec.nchannels <= 4 &&
-            uint64_t(spec.width) * uint64_t(spec.height) <= decode.max_pixels) {
-            const OIIO::TypeDesc::BASETYPE base = OIIO::TypeDesc::BASETYPE(spec.format.basetype);
-            const SourceLayout layout{spec.nchannels, int(spec.format.size()),
-                                      base == OIIO::TypeDesc::HALF || base == OIIO::TypeDesc::FLOAT ||
-                                          base == OIIO::TypeDesc::DOUBLE};
-            check_memory_budget(estimate_bake_memory(spec.width, spec.height, layout, settings, write),
-                                settings.max_memory_bytes, spec.width, spec.height, settings.fit.max_lobes,
-                                "cannot bake '" + input_path + "'");
-        }
-        // And on a colour image that is missing, unreadable or of another size.
-        if (!write.color_path.empty()) {
-            const OIIO::ImageSpec color = open_image(write.color_path)->spec();
-            require_color_size(write.color_path, color.width, color.height, spec.width, spec.height);
-        }
+    const ImageLayout header = read_image_layout(input_path);
+    if (header.width > 0 && header.height > 0 && header.channels >= 2 && header.channels <= 4 &&
+        uint64_t(header.width) * uint64_t(header.height) <= decode.max_pixels) {
+        const SourceLayout layout{header.channels, header.bytes_per_sample, header.float_samples};
+        check_memory_budget(estimate_bake_memory(header.width, header.height, layout, settings, write),
+                            settings.max_memory_bytes, header.width, header.height, settings.fit.max_lobes,
+                            "cannot bake '" + input_path + "'");
     }
+    // And on a colour image that is missing, unreadable or of another size.
+    check_color_image(write, header.width, header.height);
+
     BakeTimings timings;
-    auto start = std::chrono::steady_clock::now();
+    const auto start = std::chrono::steady_clock::now();
     check_progress(progress, "decode", 0.0);
     const DecodeResult decoded = decode_normal_map(input_path, decode);
     timings.decode = seconds_since(start);
 
-    start = std::chrono::steady_clock::now();
-    const LobePyramid pyramid = build_lobe_pyramid(decoded.map, settings, [&](double fraction) {
-        return !progress || progress("fit", fraction);
-    });
-    timings.fit = seconds_since(start);
-
     WriteSettings named = write;
     if (named.source_name.empty()) named.source_name = fs::path(input_path).filename().string();
-    return write_pyramid_into(pyramid, decoded, out_dir, settings, named, timings, progress);
+    return fit_and_write(decoded, out_dir, settings, named, timings, progress);
 }
+
+BakeOutcome bake_map_into(const DecodeResult& decoded, const std::string& out_dir, const PyramidSettings& settings,
+                          const WriteSettings& write, const StageProgress& progress)
+{
+    // The checks of bake_file_into, on the map in memory.
+    ensure_writable_directory(out_dir);
+    const NormalMap& map = decoded.map;
+    check_memory_budget(estimate_bake_memory(map.width, map.height, SourceLayout{}, settings, write),
+                        settings.max_memory_bytes, map.width, map.height, settings.fit.max_lobes,
+                        "cannot bake '" + write.source_name + "'");
+    check_color_image(write, map.width, map.height);
+    return fit_and_write(decoded, out_dir, settings, write, BakeTimings{}, progress);
+}
+
+}  // namespace
 
 BakeOutcome write_pyramid(const LobePyramid& pyramid, const DecodeResult& decoded, const std::string& out_dir,
                           const PyramidSettings& settings, const WriteSettings& write, BakeTimings timings,
@@ -489,6 +513,14 @@ BakeOutcome write_pyramid(const LobePyramid& pyramid, const DecodeResult& decode
 {
     return removing_new_folders_on_failure(out_dir, [&] {
         return write_pyramid_into(pyramid, decoded, out_dir, settings, write, timings, progress);
+    });
+}
+
+BakeOutcome bake_map(const DecodeResult& decoded, const std::string& out_dir, const PyramidSettings& settings,
+                     const WriteSettings& write, const StageProgress& progress)
+{
+    return removing_new_folders_on_failure(out_dir, [&] {
+        return bake_map_into(decoded, out_dir, settings, write, progress);
     });
 }
 

@@ -41,6 +41,13 @@ BakeOutcome write_pyramid(const LobePyramid& pyramid, const DecodeResult& decode
                           const PyramidSettings& settings, const WriteSettings& write, BakeTimings timings,
                           const StageProgress& progress);
 
+// Fits a decoded map and writes its files into out_dir: what bake_file does after decoding, with
+// the same up-front checks (writable out_dir, memory, colour image) and progress stages ("fit",
+// "measure", "write"). The files name write.source_name as their source.
+BakeOutcome bake_map(const DecodeResult& decoded, const std::string& out_dir, const PyramidSettings& settings,
+                     const WriteSettings& write, const StageProgress& progress);
+
+// Decodes the image at input_path, then bakes it as bake_map does (with a "decode" stage first).
 BakeOutcome bake_file(const std::string& input_path, const std::string& out_dir, const DecodeOptions& decode,
                       const PyramidSettings& settings, const WriteSettings& write, const StageProgress& progress);
 

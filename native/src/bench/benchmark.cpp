@@ -1,7 +1,5 @@
 #include "bench/benchmark.h"
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -15,6 +13,7 @@
 #include "bench/vmf_ndf_pyramid.h"
 #include "error.h"
 #include "io/atomic_file.h"
+#include "io/image_files.h"
 #include "math/sphere.h"
 
 namespace ndfbake {
@@ -142,13 +141,7 @@ void write_heatmap(const std::string& path, const LevelSize& size, const std::ve
         pixels[i * 3 + 1] = (unsigned char)(255.0f * std::sqrt(t));
         pixels[i * 3 + 2] = (unsigned char)(255.0f * std::clamp(0.5f - t, 0.0f, 1.0f));
     }
-    write_file_atomic(path, [&](const std::string& temp) {
-        auto out = OIIO::ImageOutput::create(temp);
-        if (!out) throw Error(Status::io_error, "cannot write '" + path + "': " + OIIO::geterror());
-        const OIIO::ImageSpec spec(size.width, size.height, 3, OIIO::TypeDesc::UINT8);
-        if (!out->open(temp, spec) || !out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) || !out->close())
-            throw Error(Status::io_error, "cannot write '" + path + "': " + out->geterror());
-    });
+    write_rgb8_image(path, size.width, size.height, pixels.data());
 }
 
 std::string markdown_table(const std::vector<BenchRow>& rows)

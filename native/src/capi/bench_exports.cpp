@@ -6,6 +6,7 @@
 
 #include "bench/benchmark.h"
 #include "capi/context.h"
+#include "io/image_files.h"
 #include "io/normal_decode.h"
 #include "synth/patterns.h"
 
@@ -76,6 +77,8 @@ NDFB_API ndfb_status ndfb_bench(ndfb_context ctx, const ndfb_bench_options* opti
 {
     return guarded(ctx, [&] {
         require(ctx && out_dir, "ndfb_bench: ctx and out_dir must not be null");
+        // Refused before minutes of measuring: the run ends by writing PNG heat maps.
+        if (!reads_image_files()) refuse_image_files("ndfb_bench");
         const BenchSettings settings = to_bench(options);
         const size_t total = settings.maps.size() * (settings.methods.empty() ? bench_method_names().size()
                                                                               : settings.methods.size());

@@ -13,6 +13,7 @@
 #include "bake/level_stats.h"
 #include "bake/memory_budget.h"
 #include "error.h"
+#include "io/image_files.h"
 #include "io/normal_encode.h"
 #include "math/sphere.h"
 #include "ndf/moments.h"
@@ -156,6 +157,8 @@ extern "C" {
 
 NDFB_API const char* ndfb_version(void) { return NDFBAKE_VERSION_STRING; }
 NDFB_API uint32_t ndfb_abi_version(void) { return NDFB_ABI_VERSION; }
+
+NDFB_API int32_t ndfb_has_image_files(void) { return reads_image_files() ? 1 : 0; }
 
 NDFB_API ndfb_status ndfb_context_create(ndfb_context* out)
 {
@@ -446,6 +449,17 @@ NDFB_API ndfb_status ndfb_bake(ndfb_context ctx, const char* input_path, const c
     return guarded(ctx, [&] {
         require(ctx && input_path && out_dir && fit, "ndfb_bake: ctx, input_path, out_dir and fit must not be null");
         bake_file(input_path, out_dir, to_decode(decode), to_pyramid(fit), to_write(write), to_progress(fit));
+    });
+}
+
+NDFB_API ndfb_status ndfb_bake_map(ndfb_context ctx, ndfb_normal_map map, const char* out_dir,
+                                   const ndfb_fit_options* fit, const ndfb_write_options* write)
+{
+    return guarded(ctx, [&] {
+        require(ctx && map && out_dir && fit, "ndfb_bake_map: ctx, map, out_dir and fit must not be null");
+        WriteSettings settings = to_write(write);
+        if (settings.source_name.empty()) settings.source_name = "memory";
+        bake_map(map->decoded, out_dir, to_pyramid(fit), settings, to_progress(fit));
     });
 }
 

@@ -2,12 +2,16 @@
 
 #include <cerrno>
 #include <cstring>
+#include <type_traits>
 
-#include <OpenImageIO/imageio.h>
+#include <Imath/half.h>
+#include <OpenEXR/openexr.h>
 
 #include "error.h"
 #include "io/atomic_file.h"
-#include "io/image_read.h"
+
+// Written with OpenEXR's C core (OpenEXRCore), not OpenImageIO: it needs nothing but zlib and the
+// C library, so the Blender add-on's library can carry it (see native/CMakeLists.txt).
 
 namespace ndfbake {
 
@@ -15,19 +19,15 @@ namespace {
 
 // zlib at its fastest level: lossless like the default level, files about 6% larger, written
 // 1.5× faster (compressing the lobe textures is most of a bake's write time).
-constexpr const char* kZlibCompression = "zip:1";
+constexpr int kZlibLevel = 1;
 
-OIIO::ImageSpec exr_spec(int width, int height, PixelPrecision precision,
-                         const std::vector<ExrAttribute>& attributes, ExrCompression compression)
+// OpenEXRCore reports an error through a callback before returning its code; the message is kept
+// per thread, since the lobe textures of a bake are written on every core at once.
+thread_local std::string t_exr_message;
+
+void remember_exr_message(exr_const_context_t, exr_result_t, const char* message)
 {
-    OIIO::ImageSpec spec(width, height, 4,
-                         precision == PixelPrecision::half ? OIIO::TypeDesc::HALF
-                                                           : OIIO::TypeDesc::FLOAT);
-    spec.attribute("compression", compression == ExrCompression::run_length ? "rle" : kZlibCompression);
-    for (const ExrAttribute& attribute : attributes)
-        std::visit([&](const auto& value) { spec.attribute(attribute.name, value); },
-                   attribute.value);
-    return spec;
+    t_exr_message = message ? message : "";
 }
 
 [[noreturn]] void throw_write_error(const std::string& path, const std::string& detail)
@@ -35,9 +35,9 @@ OIIO::ImageSpec exr_spec(int width, int height, PixelPrecision precision,
     throw Error(Status::io_error, "cannot write '" + path + "': " + detail);
 }
 
-// OpenEXR reports a failed write as "File output failed." without the reason; the errno of the
-// write is still set when OpenImageIO returns. Only errors a write can raise are named, so a stale
-// errno from an earlier, unrelated call is never blamed.
+// OpenEXR reports a failed write without the reason; the errno of the write is still set when it
+// returns. Only errors a write can raise are named, so a stale errno from an earlier, unrelated
+// call is never blamed.
 std::string write_errno_reason(int error)
 {
     switch (error) {
@@ -45,6 +45,114 @@ std::string write_errno_reason(int error)
         return std::string(" (") + std::strerror(error) + ")";
     default: return {};
     }
+}
+
+// Calls an OpenEXRCore function; a failure throws with the library's message (or its code's name).
+void check(exr_result_t result, const std::string& path)
+{
+    if (result == EXR_ERR_SUCCESS) return;
+    const int error = errno;
+    const std::string message = t_exr_message.empty() ? exr_get_default_error_message(result) : t_exr_message;
+    throw_write_error(path, message + write_errno_reason(error));
+}
+
+// A write context that is always finished: exr_finish also releases a context whose write failed.
+class ExrWriter {
+public:
+    ExrWriter(const std::string& temp_path, const std::string& path) : path_(path)
+    {
+        exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+        init.error_handler_fn = &remember_exr_message;
+        t_exr_message.clear();
+        errno = 0;
+        check(exr_start_write(&context_, temp_path.c_str(), EXR_WRITE_FILE_DIRECTLY, &init), path_);
+    }
+    ExrWriter(const ExrWriter&) = delete;
+    ExrWriter& operator=(const ExrWriter&) = delete;
+    ~ExrWriter()
+    {
+        if (context_) exr_finish(&context_);
+    }
+    exr_context_t get() const { return context_; }
+    // Writes the offset table and closes the file.
+    void finish() { check(exr_finish(&context_), path_); }
+
+private:
+    exr_context_t context_ = nullptr;
+    std::string path_;
+};
+
+void set_attribute(exr_context_t context, int part, const ExrAttribute& attribute, const std::string& path)
+{
+    const char* name = attribute.name.c_str();
+    std::visit(
+        [&](const auto& value) {
+            using T = std::decay_t<decltype(value)>;
+            if constexpr (std::is_same_v<T, int>) check(exr_attr_set_int(context, part, name, value), path);
+            else if constexpr (std::is_same_v<T, float>) check(exr_attr_set_float(context, part, name, value), path);
+            else check(exr_attr_set_string(context, part, name, value.c_str()), path);
+        },
+        attribute.value);
+}
+
+// The header: one scanline part, R, G, B, A of one sample type, the given compression and attributes.
+int write_header(exr_context_t context, int width, int height, exr_pixel_type_t type,
+                 const std::vector<ExrAttribute>& attributes, ExrCompression compression, const std::string& path)
+{
+    int part = 0;
+    check(exr_add_part(context, nullptr, EXR_STORAGE_SCANLINE, &part), path);
+    const bool rle = compression == ExrCompression::run_length;
+    check(exr_initialize_required_attr_simple(context, part, width, height,
+                                              rle ? EXR_COMPRESSION_RLE : EXR_COMPRESSION_ZIP),
+          path);
+    if (!rle) check(exr_set_zip_compression_level(context, part, kZlibLevel), path);
+    for (const char* channel : {"R", "G", "B", "A"})
+        if (exr_add_channel(context, part, channel, type, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1) != EXR_ERR_SUCCESS)
+            check(EXR_ERR_INVALID_ARGUMENT, path);
+    for (const ExrAttribute& attribute : attributes) set_attribute(context, part, attribute, path);
+    check(exr_write_header(context), path);
+    return part;
+}
+
+// Encodes interleaved RGBA samples of type T (width * 4 per row, top row first), chunk by chunk.
+template <typename T>
+void write_scanlines(exr_context_t context, int part, int width, int height, exr_pixel_type_t type,
+                     const T* rgba, const std::string& path)
+{
+    int32_t lines_per_chunk = 0;
+    check(exr_get_scanlines_per_chunk(context, part, &lines_per_chunk), path);
+    exr_encode_pipeline_t encoder{};
+    bool started = false;
+    const auto destroy = [&] { if (started) exr_encoding_destroy(context, &encoder); };
+    try {
+        for (int y = 0; y < height; y += lines_per_chunk) {
+            exr_chunk_info_t chunk{};
+            check(exr_write_scanline_chunk_info(context, part, y, &chunk), path);
+            if (started) {
+                check(exr_encoding_update(context, part, &chunk, &encoder), path);
+            } else {
+                check(exr_encoding_initialize(context, part, &chunk, &encoder), path);
+                started = true;
+            }
+            // The file stores the channels sorted by name (A, B, G, R): each reads its own offset.
+            for (int c = 0; c < encoder.channel_count; ++c) {
+                exr_coding_channel_info_t& channel = encoder.channels[c];
+                const int offset = std::strchr("RGBA", channel.channel_name[0]) - "RGBA";
+                channel.encode_from_ptr =
+                    reinterpret_cast<const uint8_t*>(rgba + (size_t(chunk.start_y) * size_t(width)) * 4 + size_t(offset));
+                channel.user_pixel_stride = int32_t(4 * sizeof(T));
+                channel.user_line_stride = int32_t(size_t(width) * 4 * sizeof(T));
+                channel.user_bytes_per_element = int16_t(sizeof(T));
+                channel.user_data_type = uint16_t(type);
+            }
+            if (y == 0) check(exr_encoding_choose_default_routines(context, part, &encoder), path);
+            check(exr_encoding_run(context, part, &encoder), path);
+        }
+    } catch (...) {
+        destroy();
+        throw;
+    }
+    destroy();
 }
 
 }  // namespace
@@ -57,48 +165,20 @@ void write_rgba_exr(const std::string& path, int width, int height, const float*
         throw Error(Status::invalid_argument,
                     "cannot write '" + path + "': no pixels (" + std::to_string(width) + " x " +
                         std::to_string(height) + ")");
-    const OIIO::ImageSpec spec = exr_spec(width, height, precision, attributes, compression);
+    // Half samples are rounded here (to nearest, as OpenImageIO and Imath do) and stored as they are.
+    std::vector<Imath::half> halves;
+    if (precision == PixelPrecision::half)
+        halves.assign(rgba, rgba + size_t(width) * size_t(height) * 4);
+    const exr_pixel_type_t type = precision == PixelPrecision::half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
     write_file_atomic(path, [&](const std::string& temp_path) {
-        // Created by format name, not extension: the file is EXR whatever `path` ends with.
-        std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create("openexr");
-        if (!out)
-            throw_write_error(path, OIIO::geterror());
-        errno = 0;
-        if (!out->open(temp_path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, rgba) ||
-            !out->close()) {
-            const int error = errno;
-            throw_write_error(path, out->geterror() + write_errno_reason(error));
-        }
+        ExrWriter writer(temp_path, path);
+        const int part = write_header(writer.get(), width, height, type, attributes, compression, path);
+        if (precision == PixelPrecision::half)
+            write_scanlines(writer.get(), part, width, height, type, halves.data(), path);
+        else
+            write_scanlines(writer.get(), part, width, height, type, rgba, path);
+        writer.finish();
     });
-}
-
-ImageInfo read_image_info(const std::string& path)
-{
-    const std::unique_ptr<OIIO::ImageInput> in = open_image(path);
-    const OIIO::ImageSpec& spec = in->spec();
-    ImageInfo info;
-    info.format = in->format_name();
-    info.width = spec.width;
-    info.height = spec.height;
-    info.channels = spec.nchannels;
-    info.pixel_type = spec.format.c_str();
-    for (const OIIO::ParamValue& param : spec.extra_attribs)
-        info.attributes.emplace_back(param.name().string(), param.get_string());
-    return info;
-}
-
-std::vector<float> read_rgba_exr(const std::string& path, int& width, int& height)
-{
-    const std::unique_ptr<OIIO::ImageInput> in = open_image(path);
-    const OIIO::ImageSpec& spec = in->spec();
-    if (spec.nchannels != 4)
-        throw_read_error(Status::unsupported_format, path,
-                         std::to_string(spec.nchannels) + " channels, expected 4 (RGBA)");
-    std::vector<float> rgba(size_t(spec.width) * size_t(spec.height) * 4);
-    read_all_pixels(*in, path, OIIO::TypeDesc::FLOAT, rgba.data());
-    width = spec.width;
-    height = spec.height;
-    return rgba;
 }
 
 }  // namespace ndfbake

@@ -1,5 +1,5 @@
-// Decoding tangent-space normal maps from any format OpenImageIO reads into unit OpenGL-convention
-// normals. Every choice the file does not state for itself (sRGB handling, float encoding, channel
+// Decoding tangent-space normal maps, from any format OpenImageIO reads or from pixels in memory,
+// into unit OpenGL-convention normals. Every choice the file does not state for itself (sRGB handling, float encoding, channel
 // meaning, convention) is made explicitly and written down in DecodeResult::assumptions.
 #pragma once
 
@@ -48,7 +48,8 @@ struct DecodeResult {
     std::vector<std::string> assumptions;  // one human sentence per assumption made
 };
 
-// Decodes subimage 0, MIP level 0 of the image at `path`. Unsigned integer samples map
+// Decodes subimage 0, MIP level 0 of the image at `path` (io/normal_file_decode.cpp; the library
+// built without OpenImageIO refuses, io/no_image_files.cpp). Unsigned integer samples map
 // v -> 2v - 1; float samples follow options.float_encoding; 2 channels are X, Y with Z rebuilt,
 // 3 are XYZ, 4 are XYZ plus an ignored alpha. Throws Error on any unreadable or unsuitable file.
 DecodeResult decode_normal_map(const std::string& path, const DecodeOptions& options);
