@@ -1,0 +1,151 @@
+// The add-on's library as Blender loads it: dlopen'ed from its own folder by a process with an
+// empty environment (no LD_LIBRARY_PATH), it must find what it needs there, bake pixels from
+// memory through ndfb_bake_map, and refuse every call that needs image files with
+// NDFB_ERROR_UNSUPPORTED_FORMAT and a message saying what to call instead.
+// Usage: addon_library_bake_from_pixels <folder>/libndfbake.so <out_dir>
+// Prints one line per check; exit status 0 when all pass.
+#include <dlfcn.h>
+#include <link.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "ndfbake.h"
+
+namespace {
+
+int g_failures = 0;
+
+void check(bool ok, const std::string& what)
+{
+    std::printf("%s: %s\n", ok ? "ok" : "FAIL", what.c_str());
+    if (!ok) ++g_failures;
+}
+
+// The C API, looked up in the library dlopen returned.
+struct Api {
+    void* library = nullptr;
+    template <typename Fn>
+    Fn* get(const char* name)
+    {
+        auto* fn = reinterpret_cast<Fn*>(dlsym(library, name));
+        if (!fn) {
+            std::printf("FAIL: %s is not exported\n", name);
+            std::exit(1);
+        }
+        return fn;
+    }
+};
+#define NDFB(api, name) (api).get<decltype(name)>(#name)
+
+// Every loaded object outside the C and C++ runtimes must come from the library's own folder.
+int check_loaded_object(dl_phdr_info* info, size_t, void* data)
+{
+    static const std::set<std::string> runtime = {"libc.so.6", "libm.so.6", "libstdc++.so.6", "libgcc_s.so.1",
+                                                  "ld-linux-x86-64.so.2", "libpthread.so.0", "libdl.so.2",
+                                                  "librt.so.1", "linux-vdso.so.1"};
+    const std::string path = info->dlpi_name ? info->dlpi_name : "";
+    if (path.empty()) return 0;  // the program itself
+    const std::filesystem::path file(path);
+    const std::string& folder = *static_cast<const std::string*>(data);
+    if (!runtime.count(file.filename().string()))
+        check(file.parent_path() == folder, "loaded from the library's folder: " + path);
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv)
+{
+    if (argc != 3) {
+        std::fprintf(stderr, "usage: %s <folder>/libndfbake.so <out_dir>\n", argv[0]);
+        return 2;
+    }
+    const std::string library_path = std::filesystem::canonical(argv[1]).string(), out_dir = argv[2];
+    Api api;
+    api.library = dlopen(library_path.c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (!api.library) {
+        std::printf("FAIL: dlopen: %s\n", dlerror());
+        return 1;
+    }
+    std::string folder = std::filesystem::path(library_path).parent_path().string();
+    dl_iterate_phdr(&check_loaded_object, &folder);
+
+    check(NDFB(api, ndfb_abi_version)() == NDFB_ABI_VERSION, "ABI version");
+    check(NDFB(api, ndfb_has_image_files)() == 0, "ndfb_has_image_files() is 0");
+    ndfb_context ctx = nullptr;
+    check(NDFB(api, ndfb_context_create)(&ctx) == NDFB_OK, "context");
+    const auto last_error = NDFB(api, ndfb_last_error);
+
+    // A 64 x 64 map of bumps, [0, 1]-encoded RGB as Blender's image pixels are.
+    const uint32_t size = 64;
+    std::vector<float> pixels(size * size * 3);
+    for (uint32_t y = 0; y < size; ++y)
+        for (uint32_t x = 0; x < size; ++x) {
+            const float u = 0.5f * std::sin(float(x) * 0.4f), v = 0.5f * std::cos(float(y) * 0.3f);
+            const float z = std::sqrt(1.0f - u * u - v * v);
+            float* p = &pixels[(y * size + x) * 3];
+            p[0] = 0.5f * u + 0.5f, p[1] = 0.5f * v + 0.5f, p[2] = 0.5f * z + 0.5f;
+        }
+    ndfb_decode_options decode;
+    NDFB(api, ndfb_decode_options_init)(&decode);
+    ndfb_normal_map map = nullptr;
+    check(NDFB(api, ndfb_normal_map_from_pixels)(ctx, pixels.data(), pixels.size(), size, size, 3, 0, &decode,
+                                                   &map) == NDFB_OK,
+          "ndfb_normal_map_from_pixels");
+
+    ndfb_fit_options fit;
+    NDFB(api, ndfb_fit_options_init)(&fit);
+    fit.max_lobes = 2;
+    std::set<std::string> stages;
+    fit.progress = [](void* user, const char* stage, float) {
+        static_cast<std::set<std::string>*>(user)->insert(stage);
+        return 0;
+    };
+    fit.progress_user = &stages;
+    ndfb_write_options write;
+    NDFB(api, ndfb_write_options_init)(&write);
+    write.source_name = "bumps (Blender image)";
+    write.atlas = 1;
+    const ndfb_status baked = NDFB(api, ndfb_bake_map)(ctx, map, out_dir.c_str(), &fit, &write);
+    check(baked == NDFB_OK, std::string("ndfb_bake_map: ") + last_error(ctx));
+    check(stages == std::set<std::string>{"fit", "measure", "write"}, "progress stages fit, measure, write");
+    for (const char* file : {"level00_lobe0.exr", "level00_lobe1.exr", "level06_lobe1.exr", "atlas_lobe0.exr",
+                             "report.json", "ndfbake.glsl"})
+        check(std::filesystem::exists(std::filesystem::path(out_dir) / file), std::string("wrote ") + file);
+
+    // What needs image files: refused with the documented status and a message naming the way out.
+    const auto refused = [&](ndfb_status status, const std::string& call) {
+        const std::string message = last_error(ctx);
+        check(status == NDFB_ERROR_UNSUPPORTED_FORMAT &&
+                  message.find("reads and writes no image files") != std::string::npos &&
+                  message.find("ndfb_normal_map_from_pixels") != std::string::npos &&
+                  message.find("ndfb_bake_map") != std::string::npos,
+              call + " refused: " + message);
+    };
+    const std::string refused_dir = out_dir + "-refused";
+    ndfb_normal_map loaded = nullptr;
+    refused(NDFB(api, ndfb_normal_map_load)(ctx, "normal.png", &decode, &loaded), "ndfb_normal_map_load");
+    check(loaded == nullptr, "ndfb_normal_map_load leaves its output NULL");
+    refused(NDFB(api, ndfb_bake)(ctx, "normal.png", refused_dir.c_str(), &decode, &fit, &write), "ndfb_bake");
+    char text[64];
+    refused(NDFB(api, ndfb_describe_image)(ctx, "level00_lobe0.exr", text, sizeof text, nullptr),
+            "ndfb_describe_image");
+    refused(NDFB(api, ndfb_normal_map_save)(ctx, map, (refused_dir + "/map.png").c_str()), "ndfb_normal_map_save");
+    ndfb_bench_options bench;
+    NDFB(api, ndfb_bench_options_init)(&bench);
+    bench.synthetic_size = 8;
+    refused(NDFB(api, ndfb_bench)(ctx, &bench, refused_dir.c_str()), "ndfb_bench");
+    write.color_path = "color.png";
+    refused(NDFB(api, ndfb_bake_map)(ctx, map, refused_dir.c_str(), &fit, &write), "ndfb_bake_map with color_path");
+    check(!std::filesystem::exists(refused_dir), "refused calls leave no folder behind");
+
+    NDFB(api, ndfb_normal_map_destroy)(map);
+    NDFB(api, ndfb_context_destroy)(ctx);
+    std::printf("%s addon_library_bake_from_pixels\n", g_failures == 0 ? "PASS" : "FAIL");
+    return g_failures == 0 ? 0 : 1;
+}
