@@ -59,6 +59,47 @@ TEST_F(BakeApi, WritesSelfDescribingLobeTexturesAndAReport)
     for (const std::string& entry : listing(out)) EXPECT_EQ(entry.find(".ndfbake"), std::string::npos) << entry;
 }
 
+TEST_F(BakeApi, BakeMapWritesWhatBakeWritesForTheSamePixels)
+{
+    // The same normals as a float EXR file and as pixels in memory (0.5 n + 0.5, as the file
+    // stores them): ndfb_bake and ndfb_bake_map write the same lobe texels.
+    ndfb_normal_map synthetic = nullptr;
+    ASSERT_EQ(ndfb_synthesize(ctx_, "bumps", 16, 8, 3, &synthetic), NDFB_OK);
+    const std::string input = path("bumps.exr");
+    ASSERT_EQ(ndfb_normal_map_save(ctx_, synthetic, input.c_str()), NDFB_OK) << ndfb_last_error(ctx_);
+    std::vector<float> pixels(16 * 8 * 3);
+    ASSERT_EQ(ndfb_normal_map_read(synthetic, pixels.data(), pixels.size()), NDFB_OK);
+    for (float& v : pixels) v = 0.5f * v + 0.5f;
+    ndfb_normal_map_destroy(synthetic);
+    ndfb_normal_map map = nullptr;
+    ASSERT_EQ(ndfb_normal_map_from_pixels(ctx_, pixels.data(), pixels.size(), 16, 8, 3, 0, &decode_, &map), NDFB_OK);
+
+    std::vector<std::string> stages;
+    ndfb_fit_options fit = fit_;
+    fit.progress = [](void* user, const char* stage, float) {
+        auto& seen = *static_cast<std::vector<std::string>*>(user);
+        if (seen.empty() || seen.back() != stage) seen.push_back(stage);
+        return 0;
+    };
+    fit.progress_user = &stages;
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), path("from_file").c_str(), &decode_, &fit_, &write_), NDFB_OK)
+        << ndfb_last_error(ctx_);
+    ASSERT_EQ(ndfb_bake_map(ctx_, map, path("from_pixels").c_str(), &fit, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+    ndfb_normal_map_destroy(map);
+    EXPECT_EQ(stages, (std::vector<std::string>{"fit", "measure", "write"}));
+    for (const char* file : {"/level00_lobe0.exr", "/level02_lobe3.exr", "/level04_lobe1.exr"}) {
+        int w = 0, h = 0, w2 = 0, h2 = 0;
+        EXPECT_EQ(read_rgba_exr(path("from_file") + file, w, h), read_rgba_exr(path("from_pixels") + file, w2, h2))
+            << file;
+    }
+    std::ifstream report(path("from_pixels") + "/report.json");
+    const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+    for (const char* recorded : {"\"source\": \"memory\"", "\"format\": \"memory\"", "\"repairs\"", "\"assumptions\""})
+        EXPECT_NE(text.find(recorded), std::string::npos) << recorded << " not in " << text;
+}
+
+TEST_F(BakeApi, TheFullLibraryReadsImageFiles) { EXPECT_EQ(ndfb_has_image_files(), 1); }
+
 TEST_F(BakeApi, WrittenFilesRecordTheFitThePyramidHad)
 {
     // Fitted with clamp and 2 lobes, written with the default options: the files say clamp and 2.
