@@ -46,13 +46,14 @@ from dataclasses import dataclass, field
 
 import bpy
 
-from . import id_names, lobe_folders, material_scan, native, nodes, scene_lod
+from . import id_names, image_pixels, lobe_folders, material_scan, native, nodes, scene_lod
 
 RECORD_KEY = material_scan.RECORD_KEY
 RECORD_VERSION = 1
 
-# Weights of the library's progress stages in the overall fraction (each reports 0..1).
-_STAGES = (("decode", 0.02), ("fit", 0.60), ("measure", 0.30), ("write", 0.08))
+# Weights of the library's progress stages in the overall fraction (each reports 0..1); Blender
+# decodes the map in prepare(), before the job starts.
+_STAGES = (("fit", 0.62), ("measure", 0.30), ("write", 0.08))
 
 
 @dataclass
@@ -156,6 +157,10 @@ def prepare(material, settings=None):
         raise BakeError("BAD_SETTINGS", "Cycles lobes must be %s or %s, got %r" % (nodes.WIDENED, nodes.NARROWED,
                                                                                   settings.cycles_lobes))
     lod, lod_note = _plan_lod(material, scan, settings)
+    try:
+        pixels = image_pixels.read(scan.image)
+    except image_pixels.ImageReadError as e:
+        raise BakeError("BAD_IMAGE", "the normal map of '%s' cannot be read: %s" % (material.name, e)) from None
     # Reserved last: nothing after it can fail, so no failed prepare keeps a folder name.
     try:
         relative, absolute = lobe_folders.new_folder(material)
@@ -165,7 +170,7 @@ def prepare(material, settings=None):
         raise BakeError("UNSAVED_BLEND", "save the .blend first: the lobe textures of '%s' are written beside it"
                         % material.name)
     return BakeJob(material_name=material.name, material_pointer=material.as_pointer(),
-                   image_path=scan.image_path, folder=relative,
+                   image_path=scan.image_path, pixels=pixels, folder=relative,
                    out_dir=absolute + lobe_folders.PENDING_SUFFIX, final_dir=absolute,
                    wrap=_native_wrap(scan),
                    roughness=min(max(scan.roughness, 0.01), 1.0), settings=settings,
@@ -180,11 +185,12 @@ class BakeJob:
     """The native part of a bake. run() works on any thread; start()/cancel()/done/progress let
     a modal operator drive it from Blender's main thread."""
 
-    def __init__(self, material_name, image_path, folder, out_dir, final_dir, wrap, roughness, settings, targets,
-                 lod=None, lod_note="", material_pointer=0):
+    def __init__(self, material_name, image_path, pixels, folder, out_dir, final_dir, wrap, roughness, settings,
+                 targets, lod=None, lod_note="", material_pointer=0):
         self.material_name = material_name
         self.material_pointer = material_pointer  # Material.as_pointer() when prepared: follows a rename
-        self.image_path = image_path
+        self.image_path = image_path  # the normal map's file: what the lobe files record as their source
+        self.pixels = pixels          # image_pixels.Pixels: the map as Blender decoded it
         self.folder = folder
         self.out_dir = out_dir   # where the library writes: the pending folder, final_dir once committed
         self.final_dir = final_dir
@@ -250,8 +256,9 @@ class BakeJob:
         try:
             if self._cancel.is_set():
                 raise native.Error(native.ERROR_CANCELLED, "NDFB_ERROR_CANCELLED", "cancelled before it started")
-            with lib.context() as ctx:
-                ctx.bake(self.image_path, self.out_dir, max_lobes=self.settings.max_lobes,
+            p = self.pixels
+            with lib.context() as ctx, ctx.normal_map(p.data, p.width, p.height, p.channels, p.signed) as normal_map:
+                ctx.bake(normal_map, self.out_dir, source_name=self.image_path, max_lobes=self.settings.max_lobes,
                          tolerance=self.settings.tolerance, roughness=self.roughness, wrap=self.wrap,
                          refine=self.settings.refine, threads=self.settings.threads, progress=callback,
                          max_levels=self.lod.levels if self.lod else 0, atlas=self.lod is not None)
@@ -261,6 +268,7 @@ class BakeJob:
             raise _bake_error(e, self) from None
         finally:
             self.seconds = time.perf_counter() - start
+            self.pixels = None  # the decoded map can be large; finish() does not need it
 
     def start(self):
         """Runs the native bake on a worker thread; poll `done`, then call finish() on the main thread."""

@@ -2,13 +2,15 @@
 
 The library is looked for, in order:
 1. the file named by the environment variable NDFBAKE_LIBRARY (tests, development);
-2. libndfbake.so inside this add-on's folder (what the ndfbake-<version>.zip from the build carries);
-3. build/native/libndfbake.so of the source checkout this folder sits in (addon/ndfbake used
-   straight from the repository after `bash scripts/build.sh`); only inside a checkout.
+2. libndfbake.so inside this add-on's folder (what the extension and add-on zips carry, with the
+   libraries it bundles);
+3. the add-on's library in build/native/ of the source checkout this folder sits in (addon/ndfbake
+   used straight from the repository after `bash scripts/build.sh`); only inside a checkout.
 
-Loading never raises out of `status()`: a missing library, one that cannot be loaded (a missing
-OpenImageIO, say) or one of another ABI gives a single readable message that the UI shows in
-place of the Bake button. `load()` raises LibraryError with that same message.
+The add-on's library reads no image files: Blender decodes the normal map (image_pixels.py) and
+the pixels are handed over (normal_map, then bake). Loading never raises out of `status()`: a
+missing library, one that cannot be loaded or one of another ABI gives a single readable message
+that the UI shows in place of the Bake button. `load()` raises LibraryError with that same message.
 
 Calls into the library release the GIL (ctypes.CDLL), so a bake can run on a worker thread; the
 progress callback then runs on that worker thread (the library calls it on the calling thread) and
@@ -179,11 +181,14 @@ class Library:
             "ndfb_decode_options_init": (None, [c.POINTER(DecodeOptions)]),
             "ndfb_fit_options_init": (None, [c.POINTER(FitOptions)]),
             "ndfb_write_options_init": (None, [c.POINTER(WriteOptions)]),
-            "ndfb_bake": (c.c_int, [vp, c.c_char_p, c.c_char_p, c.POINTER(DecodeOptions),
-                                    c.POINTER(FitOptions), c.POINTER(WriteOptions)]),
+            "ndfb_normal_map_from_pixels": (c.c_int, [vp, c.POINTER(c.c_float), c.c_size_t, c.c_uint32, c.c_uint32,
+                                                      c.c_uint32, c.c_int32, c.POINTER(DecodeOptions), c.POINTER(vp)]),
+            "ndfb_bake_map": (c.c_int, [vp, vp, c.c_char_p, c.POINTER(FitOptions), c.POINTER(WriteOptions)]),
             "ndfb_synthesize": (c.c_int, [vp, c.c_char_p, c.c_uint32, c.c_uint32, c.c_uint32, c.POINTER(vp)]),
             "ndfb_normal_map_save": (c.c_int, [vp, vp, c.c_char_p]),
             "ndfb_normal_map_destroy": (None, [vp]),
+            "ndfb_normal_map_size": (c.c_int, [vp, c.POINTER(c.c_uint32), c.POINTER(c.c_uint32)]),
+            "ndfb_normal_map_read": (c.c_int, [vp, c.POINTER(c.c_float), c.c_size_t]),
             "ndfb_mesh_init": (None, [c.POINTER(Mesh)]),
             "ndfb_texel_density": (c.c_int, [vp, c.POINTER(Mesh), c.POINTER(c.c_float), c.c_size_t,
                                              c.POINTER(c.c_double)]),
@@ -232,8 +237,22 @@ class NormalMap:
         self.handle = handle
 
     def save(self, path):
+        """ndfb_normal_map_save: needs a library built with image files (the add-on's has none)."""
         self._context.check(self._context.lib.lib.ndfb_normal_map_save(self._context.handle, self.handle,
                                                                        _encode(path)))
+
+    def read(self):
+        """The decoded unit normals: a (height, width, 3) float32 array, rows top to bottom."""
+        import numpy as np
+        lib = self._context.lib.lib
+        width, height = ctypes.c_uint32(), ctypes.c_uint32()
+        if lib.ndfb_normal_map_size(self.handle, ctypes.byref(width), ctypes.byref(height)) != OK:
+            raise Error(ERROR_INVALID_ARGUMENT, "NDFB_ERROR_INVALID_ARGUMENT", "not a normal map")
+        normals = np.empty((height.value, width.value, 3), dtype=np.float32)
+        if lib.ndfb_normal_map_read(self.handle, normals.ctypes.data_as(ctypes.POINTER(ctypes.c_float)),
+                                    normals.size) != OK:
+            raise Error(ERROR_INVALID_ARGUMENT, "NDFB_ERROR_INVALID_ARGUMENT", "could not read the normal map")
+        return normals
 
     def close(self):
         if self.handle:
@@ -280,17 +299,28 @@ class Context:
             message = self.lib.lib.ndfb_last_error(self.handle) or b""
             raise Error(status, self.lib.status_name(status), message.decode(errors="replace"))
 
-    def bake(self, input_path, out_dir, *, max_lobes=4, tolerance=0.0, roughness=0.5, wrap=WRAP_REPEAT,
-             refine=False, threads=0, srgb=SRGB_AS_DATA, convention=CONVENTION_OPENGL, progress=None, source_name=None,
-             max_levels=0, atlas=False):
-        """ndfb_bake with a GGX base BRDF of Blender roughness `roughness`.
+    def normal_map(self, pixels, width, height, channels, signed, convention=CONVENTION_OPENGL):
+        """ndfb_normal_map_from_pixels: `pixels` (numpy, width * height * channels values, rows top to
+        bottom) encoded in [0, 1], or in [-1, 1] where `signed`."""
+        import numpy as np
+        data = np.ascontiguousarray(pixels, dtype=np.float32)
+        lib = self.lib.lib
+        decode = Library.init_options(DecodeOptions, lib.ndfb_decode_options_init)
+        decode.convention = convention
+        handle = ctypes.c_void_p()
+        self.check(lib.ndfb_normal_map_from_pixels(self.handle, data.ctypes.data_as(ctypes.POINTER(ctypes.c_float)),
+                                                   data.size, width, height, channels, 1 if signed else 0,
+                                                   ctypes.byref(decode), ctypes.byref(handle)))
+        return NormalMap(self, handle)
+
+    def bake(self, normal_map, out_dir, *, source_name, max_lobes=4, tolerance=0.0, roughness=0.5,
+             wrap=WRAP_REPEAT, refine=False, threads=0, progress=None, max_levels=0, atlas=False):
+        """ndfb_bake_map with a GGX base BRDF of Blender roughness `roughness`; `source_name` is what
+        the files and report.json record as the map's origin.
 
         progress(stage, fraction) -> bool: return True to cancel. Exceptions inside it cancel too.
         Raises Error on failure (status ERROR_CANCELLED when progress asked to stop)."""
         lib = self.lib.lib
-        decode = Library.init_options(DecodeOptions, lib.ndfb_decode_options_init)
-        decode.convention = convention
-        decode.srgb = srgb
         fit = Library.init_options(FitOptions, lib.ndfb_fit_options_init)
         fit.max_lobes = int(max_lobes)
         fit.tolerance = float(tolerance)
@@ -310,11 +340,11 @@ class Context:
             callback = PROGRESS_FN(trampoline)  # kept alive by this frame for the whole call
             fit.progress = callback
         write = Library.init_options(WriteOptions, lib.ndfb_write_options_init)
-        name = _encode(source_name) if source_name else None
+        name = _encode(source_name)  # kept alive by this frame for the whole call
         write.source_name = name
         write.atlas = 1 if atlas else 0
-        self.check(lib.ndfb_bake(self.handle, _encode(input_path), _encode(out_dir), ctypes.byref(decode),
-                                 ctypes.byref(fit), ctypes.byref(write)))
+        self.check(lib.ndfb_bake_map(self.handle, normal_map.handle, _encode(out_dir), ctypes.byref(fit),
+                                     ctypes.byref(write)))
         del callback
 
     def texel_density(self, positions, face_sizes, corner_vertices, vertex_normals, corner_uvs):
