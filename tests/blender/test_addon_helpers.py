@@ -75,6 +75,21 @@ def write_normal_map(path, pattern="bumps", size=64, seed=3):
     return path
 
 
+def save_normals_png(normals, path):
+    """Unit normals ((height, width, 3), rows top to bottom) as an 8-bit PNG written by Blender: for
+    a library that writes no image files (the add-on's)."""
+    height, width, _ = normals.shape
+    image = bpy.data.images.new("ndfb-normals", width, height, alpha=False)
+    rgba = np.ones((height, width, 4), dtype=np.float32)
+    rgba[..., :3] = normals[::-1] * 0.5 + 0.5  # Blender's rows run bottom to top
+    image.pixels.foreach_set(rgba.ravel())
+    image.filepath_raw = path
+    image.file_format = "PNG"
+    image.save()
+    bpy.data.images.remove(image)
+    return path
+
+
 def reset_scene():
     bpy.ops.wm.read_factory_settings(use_empty=True)
     if not hasattr(bpy.types.Material, "ndfbake_settings"):
