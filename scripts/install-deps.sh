@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs what ndfbake needs on Debian 12: Debian's own packages, then Blender 4.2, 4.5 and 5.0 as
-# the bpy module from PyPI (scripts/install-bpy.sh; NDFBAKE_BPY_SERIES="4.5" installs fewer, "" none).
-# Run as root (or via sudo).
+# the bpy module from PyPI (scripts/install-bpy.sh; NDFBAKE_BPY_SERIES="4.5" installs fewer, "" none),
+# and Debian 13's Blender 4.3 in a chroot (scripts/install-debian13-blender.sh). Run as root.
 set -euo pipefail
 packages=(build-essential cmake pkg-config libopenimageio-dev libopenexr-dev openimageio-tools
           libgtest-dev python3 python3-venv blender assimp-testmodels
@@ -12,7 +12,8 @@ packages=(build-essential cmake pkg-config libopenimageio-dev libopenexr-dev ope
           python3-matplotlib     # examples/plot_bench.py, the bench chart
           glslang-tools          # compiles the bakes' ndfbake.glsl in the tests
           libegl1 libegl-mesa0   # EEVEE in `blender -b` renders through surfaceless EGL (Mesa)
-          clang libclang-rt-14-dev)  # clang + libFuzzer: the fuzz targets (scripts/fuzz.sh)
+          clang libclang-rt-14-dev   # clang + libFuzzer: the fuzz targets (scripts/fuzz.sh)
+          debootstrap)           # the Debian 13 chroot with its Blender 4.3 (install-debian13-blender.sh)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -24,3 +25,4 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 bash "$(dirname "$0")/install-bpy.sh" ${NDFBAKE_BPY_SERIES-4.2 4.5 5.0}
+bash "$(dirname "$0")/install-debian13-blender.sh"
