@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs what ndfbake needs on Debian 12: Debian's own packages, then Blender 4.2, 4.5 and 5.0 as
 # the bpy module from PyPI (scripts/install-bpy.sh; NDFBAKE_BPY_SERIES="4.5" installs fewer, "" none),
-# and Debian 13's Blender 4.3 in a chroot (scripts/install-debian13-blender.sh). Run as root.
+# Debian 13's Blender 4.3 in a chroot (scripts/install-debian13-blender.sh), and the add-on library's
+# toolchain (scripts/install-addon-toolchain.sh). Run as root.
 set -euo pipefail
 packages=(build-essential cmake pkg-config libopenimageio-dev libopenexr-dev openimageio-tools
           libgtest-dev python3 python3-venv blender assimp-testmodels
@@ -26,3 +27,8 @@ fi
 
 bash "$(dirname "$0")/install-bpy.sh" ${NDFBAKE_BPY_SERIES-4.2 4.5 5.0}
 bash "$(dirname "$0")/install-debian13-blender.sh"
+# zig and the Debian sources that build the add-on's library for glibc 2.28. Without them the build
+# still succeeds, with a gcc-built add-on library that needs glibc 2.36 (CMake warns), so a
+# failure here (PyPI or the archive out of reach) is a warning, not the end of the install.
+bash "$(dirname "$0")/install-addon-toolchain.sh" ||
+  echo "WARNING: install-addon-toolchain.sh failed: the add-on library will need glibc 2.36" >&2
