@@ -93,8 +93,9 @@ def is_baked(material):
 def settings_from_material(material):
     """BakeSettings from the material's panel properties (defaults when the add-on is not registered)."""
     # Reading the pointer property would create it (a change to the material): only read settings
-    # the user has set; the property group's defaults are BakeSettings' defaults.
-    if material is None or "ndfbake_settings" not in material.keys():
+    # the user has set; the property group's defaults are BakeSettings' defaults. Not keys():
+    # Blender 5.0 keeps bpy.props apart from the ID's custom properties.
+    if material is None or not material.is_property_set("ndfbake_settings"):
         return BakeSettings()
     props = getattr(material, "ndfbake_settings", None)
     if props is None:

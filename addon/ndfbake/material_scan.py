@@ -43,15 +43,16 @@ from typing import Any, NamedTuple
 
 import bpy
 
-from . import node_animation
+from . import blender_compat, node_animation
 
 RECORD_KEY = "ndfbake_bake"
 # Custom property on each node a bake record names: "<role>:<key>", the key being the name the
 # bake gave its group node (unique in the tree when made). Roles: principled, normal_map, group,
 # eevee_output.
 ROLE_KEY = "ndfbake_role"
-# Colour spaces whose transform is the identity on the stored values (is_data covers the first two).
-DATA_COLOR_SPACES = {"Non-Color", "Raw", "Linear"}
+# Colour spaces whose transform is the identity on the stored values (is_data covers the first two;
+# Linear is named so in 3.x, Linear Rec.709 from 4.0).
+DATA_COLOR_SPACES = {"Non-Color", "Raw", blender_compat.linear_color_space()}
 DEFAULT_LINKED_ROUGHNESS = 0.5
 
 

@@ -14,6 +14,8 @@ such a material (LINKED_ANIMATION) before anything is changed.
 """
 import bpy
 
+from . import blender_compat
+
 TEMPORARY_ACTION = "ndfbake temporary"
 
 
@@ -45,28 +47,39 @@ def _input_paths(source, target, index_pairs):
 
 
 def tree_actions(material_tree):
-    """The actions animating the tree, each once: the active one and those of its NLA strips
-    (meta strips opened)."""
+    """The (action, slot) pairs animating the tree, each once: the active action and those of its
+    NLA strips (meta strips opened), with the slot they animate it through
+    (blender_compat.animation_slot)."""
     animation = material_tree.animation_data
     if animation is None:
         return []
-    actions = [animation.action] if animation.action is not None else []
+    actions = []
+
+    def add(holder):
+        pair = (holder.action, blender_compat.animation_slot(holder))
+        if holder.action is not None and pair not in actions:
+            actions.append(pair)
 
     def visit(strips):
         for strip in strips:
-            if strip.action is not None and strip.action not in actions:
-                actions.append(strip.action)
+            add(strip)
             visit(strip.strips)
+    add(animation)
     for track in animation.nla_tracks:
         visit(track.strips)
     return actions
+
+
+def _fcurves(action, slot, create=False):
+    return blender_compat.action_fcurves(action, slot, create)
 
 
 def input_animated(material_tree, node, index):
     """Whether a keyframe curve (active action or NLA strip) or a driver of the tree or its
     material sets input `index` of `node`."""
     paths = set(_input_paths(node, node, [(index, index)]))
-    if any(curve.data_path in paths for action in tree_actions(material_tree) for curve in action.fcurves):
+    if any(curve.data_path in paths for action, slot in tree_actions(material_tree)
+           for curve in _fcurves(action, slot)):
         return True
     sets, _ = _driver_sets(material_tree)
     return any(driver.data_path[len(prefix):] in paths for animation, prefix in sets
@@ -95,15 +108,15 @@ def _copy_properties(source, target, skip=()):
                 pass
 
 
-def copy_fcurve(action, source, data_path):
-    """A copy of `source` at `data_path` in `action`, replacing any curve there: its settings
-    (extrapolation, mute, lock, hide, colour…), its keys with their handles, easing and types, and
-    its modifiers with their settings and envelope points."""
-    existing = action.fcurves.find(data_path, index=source.array_index)
+def copy_fcurve(fcurves, source, data_path):
+    """A copy of `source` at `data_path` in `fcurves` (an action's, _fcurves), replacing any curve
+    there: its settings (extrapolation, mute, lock, hide, colour…), its keys with their handles,
+    easing and types, and its modifiers with their settings and envelope points."""
+    existing = fcurves.find(data_path, index=source.array_index)
     if existing is not None:
-        action.fcurves.remove(existing)
-    copy = action.fcurves.new(data_path, index=source.array_index,
-                              action_group=source.group.name if source.group else "")
+        fcurves.remove(existing)
+    copy = blender_compat.new_fcurve(fcurves, data_path, source.array_index,
+                                     source.group.name if source.group else "")
     _copy_properties(source, copy, skip=("data_path", "array_index", "select"))
     copy.keyframe_points.add(len(source.keyframe_points))
     for key, original in zip(copy.keyframe_points, source.keyframe_points):
@@ -173,26 +186,27 @@ def copy_input_animation(material_tree, source, target, index_pairs, move):
     paths = _input_paths(source, target, index_pairs)
     animation = material_tree.animation_data
     if animation is not None:
-        for action in tree_actions(material_tree):
+        for action, slot in tree_actions(material_tree):
             if action.library is not None:
                 continue  # refused before the bake (LINKED_ANIMATION); never written
-            _move_curves(action, paths, move, keep_targets=animates_elsewhere(action, material_tree, target.name))
+            _move_curves(_fcurves(action, slot), paths, move,
+                         keep_targets=animates_elsewhere(action, material_tree, target.name))
         _move_drivers(animation, paths, move)
     _retarget_variables(material_tree, paths, source.name)
 
 
-def _move_curves(action, paths, move, keep_targets):
-    sources = {(f.data_path, f.array_index): f for f in action.fcurves if f.data_path in paths}
+def _move_curves(fcurves, paths, move, keep_targets):
+    sources = {(f.data_path, f.array_index): f for f in fcurves if f.data_path in paths}
     if move and not keep_targets:
         targets = {path: source for source, path in paths.items()}
-        for fcurve in [f for f in action.fcurves if f.data_path in targets]:
+        for fcurve in [f for f in fcurves if f.data_path in targets]:
             if (targets[fcurve.data_path], fcurve.array_index) not in sources:
-                action.fcurves.remove(fcurve)
+                fcurves.remove(fcurve)
     for (data_path, index), fcurve in sources.items():
-        if not (keep_targets and action.fcurves.find(paths[data_path], index=index) is not None):
-            copy_fcurve(action, fcurve, paths[data_path])
+        if not (keep_targets and fcurves.find(paths[data_path], index=index) is not None):
+            copy_fcurve(fcurves, fcurve, paths[data_path])
         if move and not keep_targets:
-            action.fcurves.remove(fcurve)
+            fcurves.remove(fcurve)
 
 
 def _move_drivers(animation, paths, move):
@@ -221,10 +235,11 @@ def remove_node_animation(material_tree, node_name, clear_empty=True):
     prefix = node_prefix(node_name)
     for fcurve in [f for f in animation.drivers if f.data_path.startswith(prefix)]:
         animation.drivers.remove(fcurve)
-    for action in tree_actions(material_tree):
+    for action, slot in tree_actions(material_tree):
         if action.library is None and not animates_elsewhere(action, material_tree, node_name):
-            for fcurve in [f for f in action.fcurves if f.data_path.startswith(prefix)]:
-                action.fcurves.remove(fcurve)
+            fcurves = _fcurves(action, slot)
+            for fcurve in [f for f in fcurves if f.data_path.startswith(prefix)]:
+                fcurves.remove(fcurve)
     if clear_empty and not animation.drivers and animation.action is None and not animation.nla_tracks:
         material_tree.animation_data_clear()
 
@@ -235,23 +250,25 @@ def remove_node(material_tree, node):
     prefix = node_prefix(node.name)
     kept = []
     try:
-        for action in tree_actions(material_tree):
-            curves = [f for f in action.fcurves if f.data_path.startswith(prefix)]
+        for action, slot in tree_actions(material_tree):
+            curves = [f for f in _fcurves(action, slot) if f.data_path.startswith(prefix)]
             if curves and animates_elsewhere(action, material_tree, node.name):
                 holder = bpy.data.actions.new(TEMPORARY_ACTION)
-                kept.append((action, holder))
+                held = _fcurves(holder, blender_compat.new_action_slot(holder, "NODETREE"), create=True)
+                kept.append((action, slot, holder, held))
                 for fcurve in curves:
-                    copy_fcurve(holder, fcurve, fcurve.data_path)
+                    copy_fcurve(held, fcurve, fcurve.data_path)
         material_tree.nodes.remove(node)
     finally:
-        for action, holder in kept:
-            for fcurve in holder.fcurves:
-                copy_fcurve(action, fcurve, fcurve.data_path)
+        for action, slot, holder, held in kept:
+            for fcurve in held:
+                copy_fcurve(_fcurves(action, slot, create=True), fcurve, fcurve.data_path)
             bpy.data.actions.remove(holder)
 
 
 def linked_curves(material_tree, node_name):
     """The names of linked (library) actions of the tree that animate the named node's inputs."""
     prefix = node_prefix(node_name)
-    return [action.name for action in tree_actions(material_tree)
-            if action.library is not None and any(f.data_path.startswith(prefix) for f in action.fcurves)]
+    return [action.name for action, slot in tree_actions(material_tree)
+            if action.library is not None
+            and any(f.data_path.startswith(prefix) for f in _fcurves(action, slot))]

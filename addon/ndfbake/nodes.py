@@ -55,7 +55,7 @@ from dataclasses import dataclass, field
 
 import bpy
 
-from . import id_names, material_scan, node_animation, scene_lod
+from . import blender_compat, id_names, material_scan, node_animation, scene_lod
 
 GROUP_VERSION = 2
 TAG = "ndfbake"                       # ID/custom property marking what this add-on created
@@ -87,7 +87,8 @@ PRINCIPLED_SETTINGS = ("distribution", "subsurface_method")
 # Principled inputs the lobe group computes itself rather than passing through.
 COMPUTED_INPUTS = {"Normal", "Roughness"}
 # Principled inputs the group draws once, beside the lobes, rather than in every lobe (_emission).
-EMISSION_INPUTS = {"Emission", "Emission Strength"}
+EMISSION_COLOR = blender_compat.principled_input("Emission")
+EMISSION_INPUTS = {EMISSION_COLOR, "Emission Strength"}
 EMISSION_ALPHA = "Emission Alpha"    # the group's Mix Shader that weights the emission by Alpha
 
 
@@ -125,9 +126,7 @@ FLOAT, COLOR, VECTOR = "NodeSocketFloat", "NodeSocketColor", "NodeSocketVector"
 
 
 def _add_socket(tree, in_out, socket_type, name):
-    if hasattr(tree, "interface"):  # Blender 4.x
-        return tree.interface.new_socket(name, in_out=in_out, socket_type=socket_type)
-    return (tree.inputs if in_out == "INPUT" else tree.outputs).new(socket_type, name)
+    return blender_compat.new_interface_socket(tree, in_out, socket_type, name)
 
 
 def _link(tree, source, target):
@@ -667,12 +666,12 @@ def _emission(tree, gin, location):
     Cycles each lobe's Principled then grows its own emission branch, which costs about 32
     floats of the 255-float shader stack per lobe where Emission is linked (measured with
     Cycles' --debug-cycles summary: 134 at 4 lobes, 230 at 7; 8 overflowed, drawing the
-    material black). Blender 3.4's Principled always has Emission, Emission Strength and Alpha,
-    and carried_inputs always carries them."""
+    material black). The Principled always has the emission colour (EMISSION_COLOR), Emission
+    Strength and Alpha, and carried_inputs always carries them."""
     node = tree.nodes.new("ShaderNodeEmission")
     node.name = node.label = "Emission"
     node.location = location
-    tree.links.new(gin.outputs["Emission"], node.inputs["Color"])
+    tree.links.new(gin.outputs[EMISSION_COLOR], node.inputs["Color"])
     tree.links.new(gin.outputs["Emission Strength"], node.inputs["Strength"])
     alpha = tree.nodes.new("ShaderNodeMixShader")
     alpha.name = alpha.label = EMISSION_ALPHA
@@ -705,7 +704,9 @@ def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location
     return bsdf
 
 
-TRANSMISSION_INPUTS = ("Transmission", "Transmission Roughness")
+# Principled v2 (Blender 4.0+) has no Transmission Roughness: transmission takes Roughness.
+TRANSMISSION_INPUTS = tuple(name for name in map(blender_compat.principled_input,
+                                                  ("Transmission", "Transmission Roughness")) if name)
 
 
 def transmits(node):
