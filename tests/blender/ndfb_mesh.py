@@ -142,7 +142,7 @@ class MeshArrays:
 
     @staticmethod
     def from_blender(me, uv_layer=None):
-        """Needs loop normals: call me.calc_normals_split() (or calc_tangents()) first."""
+        """Needs loop normals: call blender_compat.ensure_loop_normals(me) (or calc_tangents()) first."""
         nv, nl, nf = len(me.vertices), len(me.loops), len(me.polygons)
         co = np.empty(nv * 3, dtype=np.float32)
         me.vertices.foreach_get("co", co)

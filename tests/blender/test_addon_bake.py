@@ -286,7 +286,8 @@ def test_bake_all_bakes_what_the_scene_renders():
 
 
 def test_linked_inputs_are_carried_and_restored():
-    from ndfbake import bake, nodes
+    from ndfbake import bake, blender_compat, nodes
+    specular = blender_compat.principled_input("Specular")
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, metallic=1.0)
         tree = material.node_tree
@@ -303,7 +304,7 @@ def test_linked_inputs_are_carried_and_restored():
         coords = tree.nodes.new("ShaderNodeTexCoord")
         tree.links.new(coords.outputs["UV"], mapping.inputs["Vector"])
         tree.links.new(mapping.outputs["Vector"], tree.nodes["Normal Texture"].inputs["Vector"])
-        principled.inputs["Specular"].default_value = 0.7
+        principled.inputs[specular].default_value = 0.7
         # A muted link renders as the input's value, and stays muted on the group node and after Revert.
         glow = tree.nodes.new("ShaderNodeValue")
         glow.outputs[0].default_value = 5.0
@@ -311,9 +312,9 @@ def test_linked_inputs_are_carried_and_restored():
         tree.links.new(glow.outputs[0], principled.inputs["Emission Strength"]).is_muted = True
         # Muted, a Clearcoat Normal link renders as the geometry's normal, which a group input
         # cannot give: not carried (Blender still says is_linked here, before a tree update).
-        clearcoat = principled.inputs["Clearcoat Normal"]
+        clearcoat = principled.inputs[blender_compat.principled_input("Clearcoat Normal")]
         tree.links.new(tree.nodes["Normal Map"].outputs["Normal"], clearcoat).is_muted = True
-        h.expect("Clearcoat Normal" not in [s.name for s in nodes.carried_inputs(principled)],
+        h.expect(clearcoat.name not in [s.name for s in nodes.carried_inputs(principled)],
                  "a muted Clearcoat Normal link is carried (is_linked: %s)" % clearcoat.is_linked)
         bpy.ops.wm.save_mainfile()
         before = h.dump_material(material)
@@ -329,7 +330,7 @@ def test_linked_inputs_are_carried_and_restored():
         h.expect(group_node.inputs["Roughness"].links[0].from_node == value, "Roughness not carried")
         h.expect(group_node.inputs["Vector"].links[0].from_node == mapping, "texture coordinates not carried")
         h.expect(abs(group_node.inputs["Normal Strength"].default_value - 0.8) < 1e-6, "strength")
-        h.expect(abs(group_node.inputs["Specular"].default_value - 0.7) < 1e-6, "Specular value")
+        h.expect(abs(group_node.inputs[specular].default_value - 0.7) < 1e-6, "Specular value")
         h.expect(abs(group_node.inputs["Metallic"].default_value - 1.0) < 1e-6, "Metallic value")
         inner = group_node.node_tree
         h.expect(all(n.uv_map == "UVMap" for n in inner.nodes if n.bl_idname == "ShaderNodeNormalMap"), "uv map")
@@ -462,12 +463,12 @@ def test_animated_inputs_keep_animating():
         material, strength = _ramped_scene(directory)
         tree = material.node_tree
         principled = tree.nodes["Principled BSDF"]
-        curve = tree.animation_data.action.fcurves[0]
+        curve = h.tree_fcurves(tree)[0]
         curve.modifiers.new("CYCLES")  # repeats the 1..11 ramp
         driver = principled.inputs["Metallic"].driver_add("default_value").driver
         driver.type = "SCRIPTED"
         driver.expression = "0.25"
-        paths_before = sorted(f.data_path for f in tree.animation_data.action.fcurves)
+        paths_before = sorted(f.data_path for f in h.tree_fcurves(tree))
         drivers_before = sorted(f.data_path for f in tree.animation_data.drivers)
         bpy.ops.wm.save_mainfile()
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
@@ -480,8 +481,8 @@ def test_animated_inputs_keep_animating():
                      "modifier repeats the ramp)" % (frame, value, expected))
         h.expect(abs(group.inputs["Metallic"].default_value - 0.25) < 1e-6, "the driver on Metallic was not carried")
         bake.revert(material)
-        h.expect(sorted(f.data_path for f in tree.animation_data.action.fcurves) == paths_before,
-                 "keyframes after revert: %s" % [f.data_path for f in tree.animation_data.action.fcurves])
+        h.expect(sorted(f.data_path for f in h.tree_fcurves(tree)) == paths_before,
+                 "keyframes after revert: %s" % [f.data_path for f in h.tree_fcurves(tree)])
         h.expect(sorted(f.data_path for f in tree.animation_data.drivers) == drivers_before, "drivers after revert")
 
 
@@ -541,7 +542,7 @@ def test_the_normal_maps_strength_is_carried_like_the_principleds_inputs():
         strength = tree.nodes["Normal Map"].inputs["Strength"]
         h.expect(abs(strength.default_value - 0.2) < 1e-4, "Revert left the Normal Map's Strength at %g, not "
                  "the node's 0.2" % strength.default_value)
-        paths = sorted(f.data_path for f in tree.animation_data.action.fcurves)
+        paths = sorted(f.data_path for f in h.tree_fcurves(tree))
         h.expect(paths == ['nodes["Normal Map"].inputs[0].default_value'], "keyframes after revert: %s" % paths)
 
 
@@ -564,7 +565,7 @@ def test_a_keyed_strength_behind_a_muted_link_is_carried():
         scene.frame_set(1)
         bpy.ops.wm.save_mainfile()
         before = h.dump_material(material)
-        curves_before = [_curve_state(f) for f in tree.animation_data.action.fcurves]
+        curves_before = [_curve_state(f) for f in h.tree_fcurves(tree)]
 
         def check(when):
             node = tree.nodes["ndfbake"]
@@ -573,7 +574,7 @@ def test_a_keyed_strength_behind_a_muted_link_is_carried():
                      "%s: the muted Strength link is not carried muted: %s"
                      % (when, [(l.from_node.name, l.is_muted) for l in socket.links]))
             path = 'nodes["ndfbake"].inputs[%d].default_value' % node.inputs.find("Normal Strength")
-            curves = [_curve_state(f)[1:] for f in tree.animation_data.action.fcurves if f.data_path == path]
+            curves = [_curve_state(f)[1:] for f in h.tree_fcurves(tree) if f.data_path == path]
             h.expect(curves == [c[1:] for c in curves_before], "%s: Normal Strength's keyframes %s, the Normal "
                      "Map's %s" % (when, curves, curves_before))
             for frame, expected in ((6, 0.6), (11, 1.0)):
@@ -595,12 +596,12 @@ def test_a_keyed_strength_behind_a_muted_link_is_carried():
         scene.frame_set(1)
         h.expect(h.dump_material(material) == before, "material differs after revert: %s"
                  % h.differences(before, h.dump_material(material)))
-        curves = [_curve_state(f) for f in tree.animation_data.action.fcurves]
+        curves = [_curve_state(f) for f in h.tree_fcurves(tree)]
         h.expect(curves == curves_before, "keyframes after revert: %s, before the bake: %s" % (curves, curves_before))
 
         bake.bake_material(material, bake.BakeSettings(max_lobes=1))  # a key the user moves on the node
         path = 'nodes["ndfbake"].inputs[%d].default_value' % tree.nodes["ndfbake"].inputs.find("Normal Strength")
-        tree.animation_data.action.fcurves.find(path).keyframe_points[1].co.y = 0.6
+        h.tree_fcurves(tree).find(path).keyframe_points[1].co.y = 0.6
         bake.revert(material)
         scene.frame_set(11)
         h.expect(abs(strength.default_value - 0.6) < 1e-4, "Revert did not keep the key moved on the node: the "
@@ -630,15 +631,19 @@ def test_nla_strips_and_driver_variables_follow_the_inputs():
     elsewhere in the tree that reads a Principled input follow the inputs to the group node and
     back: the strip animates the node, the driver reads the node's value, Revert restores the
     paths, and the copy's strip keeps its curves."""
-    from ndfbake import bake
+    from ndfbake import bake, blender_compat
     with h.scratch_dir() as directory:
         first, strength = _ramped_scene(directory)
         tree = first.node_tree
         principled = tree.nodes["Principled BSDF"]
         animation = tree.animation_data
         action = animation.action
-        animation.nla_tracks.new().strips.new("ramp", 1, action)
+        strip = animation.nla_tracks.new().strips.new("ramp", 1, action)
         animation.action = None
+
+        def strip_paths():
+            slot = blender_compat.animation_slot(strip)
+            return sorted(f.data_path for f in blender_compat.action_fcurves(action, slot))
         reader = tree.nodes.new("ShaderNodeValue")
         reader.name = "Reads Metallic"
         driver = reader.outputs[0].driver_add("default_value").driver
@@ -652,7 +657,7 @@ def test_nla_strips_and_driver_variables_follow_the_inputs():
         h.plane_with(second, "Second")
         bpy.ops.wm.save_mainfile()
         h.expect(second.node_tree.animation_data.nla_tracks[0].strips[0].action == action, "the copy shares no strip")
-        curves_before = sorted(f.data_path for f in action.fcurves)
+        curves_before = strip_paths()
         for material in (first, second):
             bake.bake_material(material, bake.BakeSettings(max_lobes=1))
         scene = bpy.context.scene
@@ -672,8 +677,7 @@ def test_nla_strips_and_driver_variables_follow_the_inputs():
         value = second.node_tree.nodes["ndfbake"].inputs["Emission Strength"].default_value
         h.expect(abs(value - 5.0) < 0.6, "reverting the first material stopped the copy's strip (%g)" % value)
         bake.revert(second)
-        h.expect(sorted(f.data_path for f in action.fcurves) == curves_before,
-                 "the strip's curves after both Reverts: %s" % sorted(f.data_path for f in action.fcurves))
+        h.expect(strip_paths() == curves_before, "the strip's curves after both Reverts: %s" % strip_paths())
         h.expect(not [a for a in bpy.data.actions if a.name.startswith("ndfbake")], "a temporary action was left")
 
 
@@ -692,7 +696,7 @@ def test_curve_settings_and_deletions_on_the_node_survive():
         material, strength = _ramped_scene(directory)
         tree = material.node_tree
         principled = tree.nodes["Principled BSDF"]
-        curve = tree.animation_data.action.fcurves[0]
+        curve = h.tree_fcurves(tree)[0]
         curve.mute = curve.lock = curve.hide = True
         curve.keyframe_points[1].type = "BREAKDOWN"
         curve.modifiers.new("ENVELOPE").control_points.add(5)
@@ -706,7 +710,7 @@ def test_curve_settings_and_deletions_on_the_node_survive():
         node.inputs["Metallic"].driver_remove("default_value")
         node.inputs["Metallic"].default_value = 0.3
         bake.revert(material)
-        after = [_curve_state(f) for f in tree.animation_data.action.fcurves]
+        after = [_curve_state(f) for f in h.tree_fcurves(tree)]
         h.expect(after == [before], "the curve after Revert: %s, before the bake: %s" % (after, before))
         h.expect(not tree.animation_data.drivers, "the driver removed on the node came back")
         h.expect(abs(principled.inputs["Metallic"].default_value - 0.3) < 1e-6, "Metallic was not written back")
@@ -805,19 +809,27 @@ def test_a_driver_variable_reading_the_strength_follows_it():
 def test_a_linked_action_is_refused():
     """An action linked from a library cannot keep the group node's curves: LINKED_ANIMATION, and
     the material stays as it was."""
-    from ndfbake import bake
+    from ndfbake import bake, blender_compat
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         action = bpy.data.actions.new("Library Action")
         action.id_root = "NODETREE"
-        curve = action.fcurves.new('nodes["Principled BSDF"].inputs[20].default_value')
+        slot = blender_compat.new_action_slot(action, "NODETREE")
+        emission = material.node_tree.nodes["Principled BSDF"].inputs.find("Emission Strength")
+        path = 'nodes["Principled BSDF"].inputs[%d].default_value' % emission
+        fcurves = blender_compat.action_fcurves(action, slot, create=True)
+        curve = blender_compat.new_fcurve(fcurves, path, 0, "")
         curve.keyframe_points.insert(1, 0.0)
+        slot_identifier = slot.identifier if slot is not None else None
         library = os.path.join(directory, "library.blend")
         bpy.data.libraries.write(library, {action}, fake_user=True)
         bpy.data.actions.remove(action)
         with bpy.data.libraries.load(library, link=True) as (source, target):
             target.actions = ["Library Action"]
-        material.node_tree.animation_data_create().action = bpy.data.actions["Library Action"]
+        animation = material.node_tree.animation_data_create()
+        animation.action = bpy.data.actions["Library Action"]
+        if slot_identifier is not None:  # slotted actions (4.4+): Blender picks no slot no ID has used
+            animation.action_slot = animation.action.slots[slot_identifier]
         before = h.dump_material(material)
         e = h.raised(bake.BakeError, lambda: bake.bake_material(material, bake.BakeSettings(max_lobes=1)),
                      "a material animated by a linked action was baked")

@@ -193,6 +193,13 @@ def dump_tree(tree):
     return {"nodes": nodes, "links": links}
 
 
+def tree_fcurves(tree):
+    """The F-curves of the tree's active action, through the slot it uses (blender_compat)."""
+    from ndfbake import blender_compat
+    animation = tree.animation_data
+    return blender_compat.action_fcurves(animation.action, blender_compat.animation_slot(animation))
+
+
 def dump_material(material):
     """dump_tree of its nodes, plus the material's own settings and custom properties."""
     data = dump_tree(material.node_tree)
@@ -202,7 +209,9 @@ def dump_material(material):
     data["drivers"] = sorted(f.data_path for f in animation.drivers) if animation is not None else None
     settings = {}
     for prop in material.bl_rna.properties:
-        if prop.type in {"BOOLEAN", "INT", "FLOAT", "STRING", "ENUM"} and prop.identifier != "rna_type":
+        # session_uid (4.x): an id for this session only, new when the file is opened again.
+        if prop.type in {"BOOLEAN", "INT", "FLOAT", "STRING", "ENUM"} \
+                and prop.identifier not in ("rna_type", "session_uid"):
             settings[prop.identifier] = _value(getattr(material, prop.identifier))
     data["settings"] = settings
     return data
@@ -276,9 +285,10 @@ def run(tests):
             traceback.print_exc()
             print("FAIL %s (%.1f s)" % (test.__name__, time.perf_counter() - start), flush=True)
     print("%d of %d passed in %.1f s" % (len(tests) - failures, len(tests), time.perf_counter() - total), flush=True)
-    if failures:
-        sys.stdout.flush()
-        os._exit(1)  # Blender's --python-exit-code only sees uncaught exceptions; be explicit
+    sys.stdout.flush()
+    # Exit here whatever the outcome: Blender's --python-exit-code only sees uncaught exceptions, and
+    # the bpy module (4.5's wheel) can hang in its exit handlers (a thread pool's destructor).
+    os._exit(1 if failures else 0)
 
 
 def cleanup(directory):

@@ -45,21 +45,21 @@ def render(scene, engine, path):
 
 
 def test_eevee_and_cycles_render_the_baked_material():
-    from ndfbake import bake, native
+    from ndfbake import bake, blender_compat, native
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="bumps", size=64, roughness=0.35, metallic=0.5)
         tree = material.node_tree
         principled = tree.nodes["Principled BSDF"]
         noise = tree.nodes.new("ShaderNodeTexNoise")
-        tree.links.new(noise.outputs["Color"], principled.inputs["Emission"])
+        tree.links.new(noise.outputs["Color"], principled.inputs[blender_compat.principled_input("Emission")])
         principled.inputs["Emission Strength"].default_value = 0.05
         scene = setup_scene()
         plain = {engine: render(scene, engine, os.path.join(directory, "plain-%s.exr" % engine))
-                 for engine in ("BLENDER_EEVEE", "CYCLES")}
+                 for engine in (blender_compat.eevee_engine(), "CYCLES")}
         for lobes in (4, native.MAX_LOBES):
             result = bake.bake_material(material, bake.BakeSettings(max_lobes=lobes))
             h.expect(result.lobes == lobes, "%d lobes asked, %d baked" % (lobes, result.lobes))
-            for engine in ("BLENDER_EEVEE", "CYCLES"):
+            for engine in (blender_compat.eevee_engine(), "CYCLES"):
                 path = os.path.join(directory, "baked-%d-%s.exr" % (lobes, engine))
                 pixels = render(scene, engine, path)
                 h.expect(os.path.isfile(path), "%s wrote no image" % engine)
@@ -78,18 +78,19 @@ def test_emission_is_drawn_once_as_the_principled_draws_it():
     0.5: nearly all it renders is its emission, which the group draws once, beside the lobes,
     weighted by Alpha as the Principled weights it. Baked with 8 lobes, each engine's mean
     within 2% of the unbaked material's (EEVEE 4 TAA samples, Cycles 4 samples, 64²)."""
-    from ndfbake import bake, native
+    from ndfbake import bake, blender_compat, native
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="bumps", size=64, roughness=0.35, metallic=0.0)
         tree = material.node_tree
         principled = tree.nodes["Principled BSDF"]
         principled.inputs["Base Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-        principled.inputs["Specular"].default_value = 0.0
+        principled.inputs[blender_compat.principled_input("Specular")].default_value = 0.0
         principled.inputs["Emission Strength"].default_value = 2.0
         principled.inputs["Alpha"].default_value = 0.5
-        tree.links.new(tree.nodes.new("ShaderNodeTexNoise").outputs["Color"], principled.inputs["Emission"])
+        tree.links.new(tree.nodes.new("ShaderNodeTexNoise").outputs["Color"],
+                       principled.inputs[blender_compat.principled_input("Emission")])
         scene = setup_scene()
-        engines = ("BLENDER_EEVEE", "CYCLES")
+        engines = (blender_compat.eevee_engine(), "CYCLES")
         plain = {e: float(render(scene, e, os.path.join(directory, "plain-%s.exr" % e)).mean()) for e in engines}
         bake.bake_material(material, bake.BakeSettings(max_lobes=native.MAX_LOBES))
         group = material.node_tree.nodes["ndfbake"].node_tree

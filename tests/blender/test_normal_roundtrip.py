@@ -20,7 +20,8 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from ndfb_mesh import library_from_argv, MeshArrays  # noqa: E402
-from test_tangents import mirrored_suzanne  # noqa: E402
+from test_tangents import exit_now, mirrored_suzanne  # noqa: E402
+from ndfbake import blender_compat  # noqa: E402  (ndfb_mesh put addon/ on the path)
 
 SIZE = 128
 LIMIT_DEGREES = 1.0
@@ -126,7 +127,7 @@ def main():
 
     original, baked = bake_object_normals(obj, bumpy_material(), float_image("object_space"))
 
-    me.calc_normals_split()
+    blender_compat.ensure_loop_normals(me)
     arrays = MeshArrays.from_blender(me)
     tangent_map, coverage = lib.convert(arrays, original, SIZE, SIZE, to_tangent=True, padding=4)
     back, _ = lib.convert(arrays, tangent_map, SIZE, SIZE, to_tangent=False, padding=0)
@@ -169,9 +170,10 @@ def main():
         failures.append("round trip error %.3f deg >= %.1f deg" % (float(error[away].max()), LIMIT_DEGREES))
     if failures:
         print("FAILURES:\n  " + "\n  ".join(failures))
-        sys.exit(1)
+        exit_now(1)
     print("round trip passed")
 
 
 if __name__ == "__main__":
     main()
+    exit_now(0)
