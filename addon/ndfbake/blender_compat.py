@@ -89,8 +89,12 @@ def action_fcurves(action, slot, create=False):
 
 
 def new_action_slot(action, id_type):
-    """A new slot of `action` for an ID of type `id_type` (e.g. NODETREE): 4.4+; None before."""
-    return action.slots.new(id_type=id_type, name=action.name) if _slotted_actions() else None
+    """Makes `action` animate an ID of type `id_type` (e.g. NODETREE): before 4.4 through
+    Action.id_root (returns None); from 4.4 through a new slot, returned (5.0 drops id_root)."""
+    if not _slotted_actions():
+        action.id_root = id_type
+        return None
+    return action.slots.new(id_type=id_type, name=action.name)
 
 
 def new_fcurve(fcurves, data_path, index, group_name):

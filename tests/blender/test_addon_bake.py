@@ -813,7 +813,6 @@ def test_a_linked_action_is_refused():
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         action = bpy.data.actions.new("Library Action")
-        action.id_root = "NODETREE"
         slot = blender_compat.new_action_slot(action, "NODETREE")
         emission = material.node_tree.nodes["Principled BSDF"].inputs.find("Emission Strength")
         path = 'nodes["Principled BSDF"].inputs[%d].default_value' % emission
