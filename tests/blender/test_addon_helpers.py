@@ -6,6 +6,7 @@ LIB is the built libndfbake.so (NDFBAKE_LIBRARY is set to it), ZIP the add-on zi
 The add-on is imported from the source tree (addon/) and registered; test_addon_install.py checks
 the zip path instead. Not a test itself (ctest runs the files it lists).
 """
+import atexit
 import contextlib
 import os
 import shutil
@@ -285,10 +286,17 @@ def run(tests):
             traceback.print_exc()
             print("FAIL %s (%.1f s)" % (test.__name__, time.perf_counter() - start), flush=True)
     print("%d of %d passed in %.1f s" % (len(tests) - failures, len(tests), time.perf_counter() - total), flush=True)
+    exit_now(1 if failures else 0)
+
+
+def exit_now(status):
+    """Exits with `status` after Python's atexit functions (the add-on's among them) but without
+    the rest of the shutdown: Blender's --python-exit-code only sees uncaught exceptions, and the
+    bpy module (4.5's wheel) can hang in its exit handlers (a thread pool's destructor)."""
+    atexit._run_exitfuncs()
     sys.stdout.flush()
-    # Exit here whatever the outcome: Blender's --python-exit-code only sees uncaught exceptions, and
-    # the bpy module (4.5's wheel) can hang in its exit handlers (a thread pool's destructor).
-    os._exit(1 if failures else 0)
+    sys.stderr.flush()
+    os._exit(status)
 
 
 def cleanup(directory):
@@ -338,15 +346,42 @@ def render_pixels(scene, path):
     return load_pixels(path)
 
 
+# `blender -b BLEND --python SCRIPT -- ARGS` where the tests run in the bpy module (the official
+# 4.x/5.x wheels), which has no Blender binary: the module's Python opens BLEND and runs SCRIPT, and
+# exits with its status as exit_now does.
+_BPY_MODULE_LAUNCHER = """
+import atexit, os, runpy, sys
+import bpy
+blend, script = sys.argv[1], sys.argv[2]
+sys.dont_write_bytecode = True
+bpy.ops.wm.open_mainfile(filepath=blend)
+sys.argv = [script] + sys.argv[3:]
+try:
+    runpy.run_path(script, run_name="__main__")
+    status = 0
+except SystemExit as e:
+    status = e.code if isinstance(e.code, int) else int(e.code is not None)
+atexit._run_exitfuncs()
+sys.stdout.flush()
+sys.stderr.flush()
+os._exit(status)
+"""
+
+
 def run_bake_blend(blend, *args, timeout=120):
-    """examples/bake_blend.py on `blend` in a separate `blender -b`; prints its result lines and
-    returns (exit status, its whole output)."""
+    """examples/bake_blend.py on `blend` in a separate `blender -b` (or the bpy module's Python);
+    prints its result lines and returns (exit status, its whole output)."""
     library, _ = arguments()
     env = dict(os.environ, NDFBAKE_LIBRARY=library)
-    proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", blend,
-                           "--python-expr", "import sys; sys.dont_write_bytecode = True",  # keep addon/ clean
-                           "--python", os.path.join(REPO, "examples", "bake_blend.py"), "--"] + list(args),
-                          env=env, capture_output=True, text=True, timeout=timeout)
+    script = os.path.join(REPO, "examples", "bake_blend.py")
+    if bpy.app.binary_path:
+        command = [bpy.app.binary_path, "-b", "--factory-startup", blend,
+                   "--python-expr", "import sys; sys.dont_write_bytecode = True",  # keep addon/ clean
+                   "--python", script]
+    else:
+        command = [sys.executable, "-c", _BPY_MODULE_LAUNCHER, blend, script]
+    proc = subprocess.run(command + ["--"] + list(args), env=env, capture_output=True, text=True,
+                          timeout=timeout)
     lines = [l for l in proc.stdout.splitlines() if l.startswith(("baked", "FAILED", "reverted", "bake_blend"))]
     lines += [l for l in proc.stderr.splitlines() if l.startswith("bake_blend")]
     print("  bake_blend.py %s -> exit %d\n    %s" % (" ".join(args), proc.returncode, "\n    ".join(lines)),

@@ -11,6 +11,7 @@ imported with Blender's own importers) it compares per loop:
     coincident positions or zero UV area, where MikkTSpace copies or defaults frames).
 It also checks mirroring-safe splits on the mirrored Suzanne, and prints the counts compared.
 """
+import atexit
 import math
 import os
 import sys
@@ -423,8 +424,9 @@ def main():
 
 
 def exit_now(status):
-    """Exits without the interpreter's shutdown: the bpy module (4.5's wheel) can hang in its exit
-    handlers (a thread pool's destructor)."""
+    """Exits without the interpreter's shutdown but its atexit functions: the bpy module (4.5's
+    wheel) can hang in its exit handlers (a thread pool's destructor)."""
+    atexit._run_exitfuncs()
     sys.stdout.flush()
     os._exit(status)
 
