@@ -313,10 +313,10 @@ class Context:
                                                    ctypes.byref(decode), ctypes.byref(handle)))
         return NormalMap(self, handle)
 
-    def bake(self, normal_map, out_dir, *, source_name, max_lobes=4, tolerance=0.0, roughness=0.5,
+    def bake(self, normal_map, out_dir, *, source_name=None, max_lobes=4, tolerance=0.0, roughness=0.5,
              wrap=WRAP_REPEAT, refine=False, threads=0, progress=None, max_levels=0, atlas=False):
         """ndfb_bake_map with a GGX base BRDF of Blender roughness `roughness`; `source_name` is what
-        the files and report.json record as the map's origin.
+        the files and report.json record as the map's origin (None: the library's "memory").
 
         progress(stage, fraction) -> bool: return True to cancel. Exceptions inside it cancel too.
         Raises Error on failure (status ERROR_CANCELLED when progress asked to stop)."""
@@ -340,7 +340,7 @@ class Context:
             callback = PROGRESS_FN(trampoline)  # kept alive by this frame for the whole call
             fit.progress = callback
         write = Library.init_options(WriteOptions, lib.ndfb_write_options_init)
-        name = _encode(source_name)  # kept alive by this frame for the whole call
+        name = _encode(source_name) if source_name else None  # kept alive by this frame for the call
         write.source_name = name
         write.atlas = 1 if atlas else 0
         self.check(lib.ndfb_bake_map(self.handle, normal_map.handle, _encode(out_dir), ctypes.byref(fit),

@@ -76,6 +76,17 @@ def write_normal_map(path, pattern="bumps", size=64, seed=3):
     return path
 
 
+def bake_image_file(path, out_dir, **settings):
+    """Bakes the normal map in the image file `path` into `out_dir` as the add-on does: Blender
+    decodes it (image_pixels), the library bakes the pixels (native.Context.bake's settings)."""
+    from ndfbake import image_pixels, native
+    image = bpy.data.images.load(path, check_existing=True)
+    image.colorspace_settings.name = "Non-Color"
+    p = image_pixels.read(image)
+    with native.load().context() as ctx, ctx.normal_map(p.data, p.width, p.height, p.channels, p.signed) as m:
+        ctx.bake(m, out_dir, source_name=path, **settings)
+
+
 def save_normals_png(normals, path):
     """Unit normals ((height, width, 3), rows top to bottom) as an 8-bit PNG written by Blender: for
     a library that writes no image files (the add-on's)."""

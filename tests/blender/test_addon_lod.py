@@ -176,11 +176,9 @@ def test_atlas_lookups_equal_bilinear_filtering_of_the_level_files():
     from ndfbake import nodes
     h.reset_scene()
     with h.scratch_dir() as directory:
-        from ndfbake import native
         normal_map = h.write_normal_map(os.path.join(directory, "weave.png"), pattern="weave", size=32)
         out = os.path.join(directory, "lobes")
-        with native.load().context() as ctx:
-            ctx.bake(normal_map, out, max_lobes=2, roughness=0.3, atlas=True)
+        h.bake_image_file(normal_map, out, max_lobes=2, roughness=0.3, atlas=True)
         import json
         with open(os.path.join(out, "report.json")) as f:
             layout = json.load(f)["atlas"]
