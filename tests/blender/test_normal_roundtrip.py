@@ -25,6 +25,8 @@ from ndfbake import blender_compat  # noqa: E402  (ndfb_mesh put addon/ on the p
 
 SIZE = 128
 LIMIT_DEGREES = 1.0
+BUMP_FREQUENCY = 12.0  # radians per object unit: a few bumps across Suzanne's features
+BUMP_DISTANCE = 0.05   # height scale: normals bent by tens of degrees, none past the horizon
 
 
 def bake_object_normals(obj, material, image):
@@ -56,6 +58,8 @@ def float_image(name):
 
 
 def bumpy_material():
+    """Diffuse with a Bump node over height sin(ax) sin(ay) sin(az) of the object coordinates: math
+    nodes, which every Blender evaluates alike (the Noise texture's output changed in 4.0)."""
     m = bpy.data.materials.new("bumpy")
     m.use_nodes = True
     nodes, links = m.node_tree.nodes, m.node_tree.links
@@ -63,14 +67,29 @@ def bumpy_material():
     bsdf = nodes.new("ShaderNodeBsdfDiffuse")
     links.new(bsdf.outputs["BSDF"], nodes["Material Output"].inputs["Surface"])
     coord = nodes.new("ShaderNodeTexCoord")
-    noise = nodes.new("ShaderNodeTexNoise")
-    noise.inputs["Scale"].default_value = 6.0
-    noise.inputs["Detail"].default_value = 1.0
+    xyz = nodes.new("ShaderNodeSeparateXYZ")
+    links.new(coord.outputs["Object"], xyz.inputs["Vector"])
+    height = None
+    for axis in "XYZ":
+        scaled = nodes.new("ShaderNodeMath")
+        scaled.operation = "MULTIPLY"
+        scaled.inputs[1].default_value = BUMP_FREQUENCY
+        links.new(xyz.outputs[axis], scaled.inputs[0])
+        wave = nodes.new("ShaderNodeMath")
+        wave.operation = "SINE"
+        links.new(scaled.outputs["Value"], wave.inputs[0])
+        if height is None:
+            height = wave
+        else:
+            product = nodes.new("ShaderNodeMath")
+            product.operation = "MULTIPLY"
+            links.new(height.outputs["Value"], product.inputs[0])
+            links.new(wave.outputs["Value"], product.inputs[1])
+            height = product
     bump = nodes.new("ShaderNodeBump")
     bump.inputs["Strength"].default_value = 1.0
-    bump.inputs["Distance"].default_value = 0.2
-    links.new(coord.outputs["Object"], noise.inputs["Vector"])
-    links.new(noise.outputs["Fac"], bump.inputs["Height"])
+    bump.inputs["Distance"].default_value = BUMP_DISTANCE
+    links.new(height.outputs["Value"], bump.inputs["Height"])
     links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
     return m
 
