@@ -5,6 +5,9 @@
 # and with ndfbake in EEVEE and Cycles beside references, and prints the image errors.
 # Output goes to ./demo-output (the scene in ./demo-output/scene: renders, montage.png, report).
 set -euo pipefail
+# Debian's own tools first: a Python manager's shims ahead of /usr/bin (pyenv's cmake and ctest) would
+# hand the tests its interpreter, and Debian's Blender would then find that Python's home, not its own.
+export PATH=/usr/sbin:/usr/bin:/sbin:/bin:$PATH
 root=$(cd "$(dirname "$0")/.." && pwd)
 bash "$root/scripts/install-deps.sh"
 bash "$root/scripts/build.sh"

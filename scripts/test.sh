@@ -9,6 +9,9 @@
 #                              regression, not for what a random seed happened to find; 0 picks
 #                              a random seed, as `scripts/fuzz.sh TARGET 600` campaigns do)
 set -euo pipefail
+# Debian's own tools first: a Python manager's shims ahead of /usr/bin (pyenv's cmake and ctest) would
+# hand the tests its interpreter, and Debian's Blender would then find that Python's home, not its own.
+export PATH=/usr/sbin:/usr/bin:/sbin:/bin:$PATH
 root=$(cd "$(dirname "$0")/.." && pwd)
 start=$SECONDS
 stage() { echo "== test.sh: $1 ($((SECONDS - start)) s so far)"; }
