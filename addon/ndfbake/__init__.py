@@ -1,11 +1,14 @@
 """ndfbake: normal maps that stay right at every distance (Han et al. 2007 vMF lobes).
 
-Install the ndfbake-<version>.zip the build leaves in its folder (Edit > Preferences > Add-ons >
-Install), or put this folder into a scripts path's addons/. The native library (libndfbake.so)
-lives beside this file; see native.py for where else it is looked for. Registering never fails
+From Blender 4.2 on, install the extension zip the build leaves in its folder,
+ndfbake-<version>-linux_x64.zip (Get Extensions > Install from Disk; blender_manifest.toml says what
+it is); in Blender 3.4, ndfbake-<version>.zip (Preferences > Add-ons > Install; bl_info below), or
+put this folder into a scripts path's addons/. The native library (libndfbake.so) lives beside
+this file; see native.py for where else it is looked for. Registering never fails
 for want of the library: the panel then shows why it cannot be used.
 
-Modules: native (ctypes), material_scan (finds the normal map), scene_lod (what the scene's
+Modules: native (ctypes), image_pixels (the normal map as Blender decodes it), blender_compat (what
+differs between Blender versions), material_scan (finds the normal map), scene_lod (what the scene's
 cameras need), nodes (node groups), lobe_folders (where the textures go, and when they are
 deleted), bake (the work), operators and ui (thin skins). Scripts call bake.py, or the operators
 bpy.ops.ndfbake.bake / bake_all / revert; examples/bake_blend.py is a command line.
@@ -24,14 +27,14 @@ bl_info = {
 
 if "bpy" in locals():
     import importlib
-    for _module in (native, node_animation, material_scan, scene_lod, nodes, lobe_folders, bake, operators,  # noqa: F821
-                    ui):  # noqa: F821
+    for _module in (blender_compat, native, image_pixels, node_animation, material_scan, scene_lod,  # noqa: F821
+                    nodes, lobe_folders, bake, operators, ui):  # noqa: F821
         importlib.reload(_module)
 
 import bpy  # noqa: E402
 
-from . import (bake, lobe_folders, material_scan, native, node_animation, nodes, operators,  # noqa: E402,F401
-               scene_lod, ui)
+from . import (bake, blender_compat, image_pixels, lobe_folders, material_scan, native,  # noqa: E402,F401
+               node_animation, nodes, operators, scene_lod, ui)
 
 
 def register():

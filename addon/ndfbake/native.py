@@ -415,7 +415,7 @@ def load():
             except LibraryError as e:
                 _failure = str(e)  # a library that is there but unusable: say why, do not look further
                 raise
-        _failure = ("native library not found (looked for %s); install the ndfbake-<version>.zip "
+        _failure = ("native library not found (looked for %s); install the extension (or add-on) zip "
                     "from the build folder, or set %s" % (", ".join(tried), ENV_VARIABLE))
         raise LibraryError(_failure)
 
