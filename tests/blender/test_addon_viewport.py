@@ -66,7 +66,8 @@ def _build_scene(directory):
     environment.image = bpy.data.images.load(WORLD)
     world.node_tree.links.new(environment.outputs["Color"], world.node_tree.nodes["Background"].inputs["Color"])
     scene.world = world
-    scene.render.engine = "BLENDER_EEVEE"
+    from ndfbake import blender_compat
+    scene.render.engine = blender_compat.eevee_engine()
     scene.eevee.taa_render_samples = 16
     scene.eevee.taa_samples = 16
     scene.view_settings.view_transform = "Standard"
