@@ -80,7 +80,8 @@ def split_sun(scene):
                                   math.sin(elevation)))
     px[sun, :3] = fill
     image = bpy.data.images.new(env.image.name + " without sun", w, h, alpha=False, float_buffer=True)
-    image.colorspace_settings.name = "Linear"
+    from ndfbake import blender_compat
+    image.colorspace_settings.name = blender_compat.linear_color_space()
     image.pixels.foreach_set(px.ravel())
     env.image = image
     lamp = bpy.data.lights.new("Sun", "SUN")

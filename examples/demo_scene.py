@@ -96,6 +96,12 @@ def import_addon(library=None):
     return ndfbake
 
 
+def eevee_engine():
+    """EEVEE's engine id in this Blender (the add-on's blender_compat; import_addon first)."""
+    from ndfbake import blender_compat
+    return blender_compat.eevee_engine()
+
+
 def write_normal_map(path, pattern, size, seed):
     from ndfbake import native
     with native.load().context() as ctx:
@@ -270,7 +276,8 @@ def save_pixels(pixels, path, scene=None):
     scene = scene or bpy.context.scene
     h, w = pixels.shape[:2]
     image = bpy.data.images.new("ndfb-demo-pixels", w, h, alpha=False, float_buffer=True)
-    image.colorspace_settings.name = "Linear"  # new float images are tagged sRGB: saving would convert
+    from ndfbake import blender_compat
+    image.colorspace_settings.name = blender_compat.linear_color_space()  # else saving would convert
     exr = path.lower().endswith(".exr")
     try:
         rgba = np.ones((h, w, 4), dtype=np.float32)
@@ -354,7 +361,7 @@ def render_plain(scene, directory, materials, reference_samples=256, samples=16,
         log("  rendered %-18s %dx%d in %.1f s" % (name, images[name].shape[1], images[name].shape[0],
                                                   info["seconds"][name]))
 
-    timed("eevee_naive", lambda: render(scene, "BLENDER_EEVEE", os.path.join(directory, "eevee_naive.exr"),
+    timed("eevee_naive", lambda: render(scene, eevee_engine(), os.path.join(directory, "eevee_naive.exr"),
                                         eevee_samples))
     factor = supersampling_factor(scene.render.resolution_x)
     eevee_reference_samples = eevee_reference_samples or reference_taa_samples(factor)
@@ -362,7 +369,7 @@ def render_plain(scene, directory, materials, reference_samples=256, samples=16,
     try:
         big_path = os.path.join(directory, "eevee_reference_%dx.exr" % factor)
         timed("eevee_reference", lambda: image_error.box_downsample(
-            render(scene, "BLENDER_EEVEE", big_path, eevee_reference_samples, percentage=100 * factor), factor))
+            render(scene, eevee_engine(), big_path, eevee_reference_samples, percentage=100 * factor), factor))
     finally:
         set_normal_interpolation(materials, previous)
     os.remove(big_path)  # the downsampled one is kept (written below)
@@ -378,7 +385,7 @@ def render_plain(scene, directory, materials, reference_samples=256, samples=16,
 
 def render_baked(scene, directory, samples=16, eevee_samples=64, log=print):
     images, seconds = {}, {}
-    for name, engine, path, n in (("eevee_ndfbake", "BLENDER_EEVEE", "eevee_ndfbake.exr", eevee_samples),
+    for name, engine, path, n in (("eevee_ndfbake", eevee_engine(), "eevee_ndfbake.exr", eevee_samples),
                                   ("cycles_ndfbake", "CYCLES", "cycles_ndfbake.exr", samples)):
         start = time.perf_counter()
         images[name] = render(scene, engine, os.path.join(directory, path), n)
