@@ -24,14 +24,14 @@ echo "The same, refined for ggx:0.4 (--refine):"
 "$ndfbake" bake "$out/weave.png" --out "$out/weave-lobes-refined" --brdf ggx:0.4 --refine --quiet
 python3 "$root/examples/summarize_report.py" "$out/weave-lobes-refined/report.json"
 
-# The Blender scene (a couple of minutes on two cores). Blender's own chatter goes to scene.log;
-# the report is printed from report.txt.
+# The Blender scene in the newest supported Blender, 5.0 as the bpy module (install-bpy.sh; a couple
+# of minutes on two cores). Blender's own chatter goes to scene.log; the report is printed from
+# report.txt.
+blender_python=${NDFBAKE_CACHE:-$HOME/.cache/ndfbake}/bpy-5.0/bin/python
 echo
-echo "Blender demo scene -> $out/scene (log: $out/scene.log)"
+echo "Blender demo scene ($("$blender_python" -c 'import bpy; print(bpy.app.version_string)' 2>/dev/null)) -> $out/scene (log: $out/scene.log)"
 mkdir -p "$out/scene"
-if ! blender -b --factory-startup --python-exit-code 1 \
-       --python-expr "import sys; sys.dont_write_bytecode = True" \
-       --python "$root/examples/demo_scene.py" -- \
+if ! "$blender_python" -B "$root/examples/demo_scene.py" -- \
        --out "$out/scene" --library "$build/native/libndfbake.so" >"$out/scene.log" 2>&1; then
   tail -n 40 "$out/scene.log" >&2
   echo "demo.sh: the Blender demo scene failed (full log: $out/scene.log)" >&2
