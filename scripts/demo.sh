@@ -5,8 +5,8 @@
 # and with ndfbake in EEVEE and Cycles beside references, and prints the image errors.
 # Output goes to ./demo-output (the scene in ./demo-output/scene: renders, montage.png, report).
 set -euo pipefail
-# Debian's own tools first: a Python manager's shims ahead of /usr/bin (pyenv's cmake and ctest) would
-# hand the tests its interpreter, and Debian's Blender would then find that Python's home, not its own.
+# Debian's own tools first: a Python manager's shims ahead of /usr/bin (pyenv's cmake, ctest, python3)
+# would hand the scripts its interpreter, and Debian's Blender would find that Python's home, not its own.
 export PATH=/usr/sbin:/usr/bin:/sbin:/bin:$PATH
 root=$(cd "$(dirname "$0")/.." && pwd)
 bash "$root/scripts/install-deps.sh"
@@ -28,6 +28,10 @@ python3 "$root/examples/summarize_report.py" "$out/weave-lobes-refined/report.js
 # of minutes on two cores). Blender's own chatter goes to scene.log; the report is printed from
 # report.txt.
 blender_python=${NDFBAKE_CACHE:-$HOME/.cache/ndfbake}/bpy-5.0/bin/python
+if [ ! -x "$blender_python" ]; then
+  echo "demo.sh: Blender 5.0 (bpy) is not installed at $blender_python: see scripts/install-bpy.sh" >&2
+  exit 1
+fi
 echo
 echo "Blender demo scene ($("$blender_python" -c 'import bpy; print(bpy.app.version_string)' 2>/dev/null)) -> $out/scene (log: $out/scene.log)"
 mkdir -p "$out/scene"

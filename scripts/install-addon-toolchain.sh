@@ -12,7 +12,7 @@ mkdir -p "$dir/sources"
 
 if [ "$("$dir/venv/bin/python" -m ziglang version 2>/dev/null)" != "$zig_version" ]; then
   rm -rf "$dir/venv"
-  python3 -m venv "$dir/venv"
+  /usr/bin/python3 -m venv "$dir/venv"  # Debian's, whatever Python manager is on PATH
   "$dir/venv/bin/pip" install -q "ziglang==$zig_version"
 fi
 

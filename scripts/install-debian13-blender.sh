@@ -8,7 +8,8 @@
 set -euo pipefail
 root=${NDFBAKE_DEBIAN13_ROOT:-/var/cache/ndfbake/debian13}
 packages=(blender python3-numpy xvfb xauth libegl1 libegl-mesa0)
-if [ -x "$root/usr/bin/blender" ] && [ -f "$root/.ndfbake-complete" ]; then
+# The marker holds the package list it was made with: a chroot made for another list is made anew.
+if [ -x "$root/usr/bin/blender" ] && [ "$(cat "$root/.ndfbake-complete" 2>/dev/null)" = "${packages[*]}" ]; then
   exit 0
 fi
 echo "== install-debian13-blender.sh: Debian 13 with Blender into $root"
@@ -20,5 +21,5 @@ debootstrap --variant=minbase trixie "$root" "${mirror%/}" >/dev/null
 cp /etc/resolv.conf "$root/etc/resolv.conf"
 chroot "$root" apt-get update -qq
 DEBIAN_FRONTEND=noninteractive chroot "$root" apt-get install -y -qq --no-install-recommends "${packages[@]}" >/dev/null
-touch "$root/.ndfbake-complete"
+echo "${packages[*]}" >"$root/.ndfbake-complete"
 echo "== install-debian13-blender.sh: $(chroot "$root" blender --version 2>/dev/null | head -1)"

@@ -13,6 +13,7 @@ packages=(build-essential cmake pkg-config libopenimageio-dev libopenexr-dev ope
           python3-matplotlib     # examples/plot_bench.py, the bench chart
           glslang-tools          # compiles the bakes' ndfbake.glsl in the tests
           libegl1 libegl-mesa0   # EEVEE in `blender -b` renders through surfaceless EGL (Mesa)
+          libxrender1 libxi6 libxfixes3 libxkbcommon0 libsm6 libgl1  # what the bpy wheels link
           clang libclang-rt-14-dev   # clang + libFuzzer: the fuzz targets (scripts/fuzz.sh)
           debootstrap)           # the Debian 13 chroot with its Blender 4.3 (install-debian13-blender.sh)
 missing=()
@@ -25,8 +26,13 @@ if [ ${#missing[@]} -gt 0 ]; then
   apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-bash "$(dirname "$0")/install-bpy.sh" ${NDFBAKE_BPY_SERIES-4.2 4.5 5.0}
-bash "$(dirname "$0")/install-debian13-blender.sh"
+# Blender 4.2+ (bpy wheels) and Debian 13's 4.3 (chroot): the tests of a version that did not install
+# are skipped with a message (tests/CMakeLists.txt), so a failure here (PyPI or the archive out of
+# reach, no mount rights for the chroot) warns and the rest still runs.
+bash "$(dirname "$0")/install-bpy.sh" ${NDFBAKE_BPY_SERIES-4.2 4.5 5.0} ||
+  echo "WARNING: install-bpy.sh failed: the Blender tests of the bpy series it missed are skipped" >&2
+bash "$(dirname "$0")/install-debian13-blender.sh" ||
+  echo "WARNING: install-debian13-blender.sh failed: the Debian 13 Blender tests are skipped" >&2
 # zig and the Debian sources that build the add-on's library for glibc 2.28. Without them the build
 # still succeeds, with a gcc-built add-on library that needs glibc 2.36 (CMake warns), so a
 # failure here (PyPI or the archive out of reach) is a warning, not the end of the install.

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 # as [0, 1] colours: the library's rule for float files (io/normal_decode.cpp, has_signed_samples),
 # so that a map baked from Blender's pixels and from its file decode alike.
 SIGNED_FLOAT_THRESHOLD = -0.01
+BYTE_MAX = 255.0  # the largest code of an 8-bit channel
 
 
 @dataclass
@@ -39,5 +40,15 @@ def read(image):
     image.pixels.foreach_get(flat)
     # Blender's rows run bottom to top; the library's, as in files, top to bottom.
     rows = flat.reshape(height, width, channels)[::-1]
-    signed = bool(image.is_float) and float(rows[..., :min(channels, 3)].min()) < SIGNED_FLOAT_THRESHOLD
-    return Pixels(np.ascontiguousarray(rows), width, height, channels, signed)
+    if image.is_float:
+        rgb = rows[..., :min(channels, 3)]
+        finite = rgb[np.isfinite(rgb)]  # as the library: NaN and Inf say nothing of the encoding
+        signed = finite.size > 0 and float(finite.min()) < SIGNED_FLOAT_THRESHOLD
+        return Pixels(np.ascontiguousarray(rgb), width, height, rgb.shape[-1], signed)
+    # An 8-bit image: Blender holds code k as the float k / 255. The library decodes a file's code
+    # as (2k - 255) / 255 computed in double (io/normal_samples.h, code_to_component); handing it
+    # that value, signed, gives the same normals to the last bit as `ndfbake bake FILE`, whose
+    # EM would otherwise break a symmetric NDF's ties the other way (README, "Symmetric NDFs").
+    codes = np.rint(rows[..., :3].astype(np.float64) * BYTE_MAX)
+    components = ((2.0 * codes - BYTE_MAX) / BYTE_MAX).astype(np.float32)
+    return Pixels(np.ascontiguousarray(components), width, height, 3, True)

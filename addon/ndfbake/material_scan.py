@@ -14,10 +14,11 @@ Choices the design leaves open, made here:
 - One normal-map image per material. Several Principled BSDFs may share it (each gets its own
   filtered group); two different images are refused (SEVERAL_IMAGES): the lobe folder is named
   after the material, and the library's commit step owns the whole folder.
-- The image must be a file on disk that the library can read: packed, generated, movie, sequence
-  and UDIM images are refused with a message saying what to do, and nothing changes. So is an
-  image with unsaved edits (painted in Blender): the library would read the file, not what the
-  user sees.
+- The image must be a file on disk: the lobe files record it as their source and a re-bake reads
+  it again. Packed, generated, movie, sequence and UDIM images are refused with a message saying
+  what to do, and nothing changes. So is an image with unsaved edits (painted in Blender): what is
+  baked is then what the file holds, as the lobe files say. Blender decodes the file
+  (image_pixels.py).
 - A muted Normal Map or Image Texture node is no normal map: the material renders without it. So
   is a muted link on the way (Normal Map -> Principled Normal, Image Texture -> Normal Map Color):
   a muted link is no link anywhere in the scan (upstream, reachable_principled), as in Blender's
@@ -75,7 +76,7 @@ class ScanResult:
     material: str
     targets: list = field(default_factory=list)
     image: object = None           # bpy.types.Image
-    image_path: str = ""           # absolute path of the file the library reads
+    image_path: str = ""           # absolute path of the normal map's file
     wrap: str = "REPEAT"           # the Image Texture's extension
     roughness: float = 0.5
     roughness_linked: bool = False
@@ -232,7 +233,7 @@ def image_file_path(image):
 
 
 def check_image(image, node_name):
-    """The first problem that keeps the library from reading `image` as a normal map, or None."""
+    """The first problem that keeps `image` from being baked as a normal map, or None."""
     if image is None:
         return Problem("NO_IMAGE", "Image Texture '%s' has no image" % node_name)
     name = image.name
@@ -241,7 +242,7 @@ def check_image(image, node_name):
                                           "(Image > Save As) and bake again" % name)
     if image.packed_file is not None:
         return Problem("PACKED_IMAGE", "image '%s' is packed into the .blend: unpack it to a file "
-                                       "(Image > Unpack) so ndfbake can read it" % name)
+                                       "(Image > Unpack) so the lobe files can name it" % name)
     if image.source != "FILE":
         return Problem("UNSUPPORTED_SOURCE", "image '%s' is a %s, not a single image file" % (
             name, image.source.lower()))
@@ -268,7 +269,7 @@ def _alpha_associated(image):
     """Whether Blender renders a colour (not data) image's RGB multiplied by its alpha: where it has
     an alpha channel, unless its Alpha mode is Channel Packed or None, or it is an OpenEXR file
     marked Premultiplied (Blender's default for EXR: both engines then render the stored RGB). The
-    library reads the file's RGB and ignores alpha. Measured in Blender 3.4, Cycles and EEVEE, RGB
+    bake takes the stored RGB (Image.pixels) and ignores alpha. Measured in Blender 3.4, Cycles and EEVEE, RGB
     (0.9, 0.5, 0.7) at alpha 0.4: an 8-bit PNG renders it times 0.4 (Straight or Premultiplied),
     a 16-bit PNG marked Premultiplied times 0.4 in Cycles and as stored in EEVEE. Decided from the
     ImBuf's planes (Image.depth), not the pixels: an alpha channel that is 1 everywhere is refused

@@ -4,8 +4,9 @@ The library is looked for, in order:
 1. the file named by the environment variable NDFBAKE_LIBRARY (tests, development);
 2. libndfbake.so inside this add-on's folder (what the extension and add-on zips carry, with the
    libraries it bundles);
-3. the add-on's library in build/native/ of the source checkout this folder sits in (addon/ndfbake
-   used straight from the repository after `bash scripts/build.sh`); only inside a checkout.
+3. build/native/libndfbake.so of the source checkout this folder sits in (the full library, with
+   image files; addon/ndfbake used straight from the repository after `bash scripts/build.sh`);
+   only inside a checkout.
 
 The add-on's library reads no image files: Blender decodes the normal map (image_pixels.py) and
 the pixels are handed over (normal_map, then bake). Loading never raises out of `status()`: a

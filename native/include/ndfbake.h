@@ -172,7 +172,7 @@ NDFB_API const char* ndfb_last_error(ndfb_context ctx);
 NDFB_API const char* ndfb_status_name(ndfb_status status);
 /* Non-zero where the library reads and writes image files (through OpenImageIO): the full library,
  * which `ndfbake` and the tests use. The Blender add-on's library is built without image files, to
- * need nothing beyond the C and C++ runtimes and the libraries beside it; it writes the lobe
+ * need nothing beyond the C runtime (README, "Blender versions"); it writes the lobe
  * textures (OpenEXR) and report.json, but ndfb_normal_map_load, ndfb_bake, ndfb_describe_image,
  * ndfb_normal_map_save, ndfb_bench and a write_options color_path fail there with
  * NDFB_ERROR_UNSUPPORTED_FORMAT and a message naming what to call instead: decode the image in

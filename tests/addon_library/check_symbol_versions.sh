@@ -11,7 +11,7 @@ for file in "$folder"/*; do
     name=$(basename "$file")
     versions=$(objdump -T "$file" | grep -oE '\b(GLIBC|GLIBCXX|CXXABI)_[0-9.]+\b' | sort -uV)
     # The glibc versions sorting after the ceiling.
-    newer=$( (grep '^GLIBC_' <<<"$versions"; echo "$ceiling") | sort -uV | sed "1,/^$ceiling\$/d")
+    newer=$( (grep '^GLIBC_' <<<"$versions"; echo "$ceiling") | sort -uV | sed "0,/^$ceiling\$/d")
     echo "$name: glibc versions $(grep '^GLIBC_' <<<"$versions" | tr '\n' ' ')"
     if [ -n "$newer" ]; then
         echo "FAIL: $name needs glibc newer than ${ceiling#GLIBC_}:"

@@ -22,6 +22,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from ndfb_mesh import library_from_argv, MeshArrays, write_bmesh  # noqa: E402
+from ndfbake import blender_compat  # noqa: E402  (ndfb_mesh put addon/ on the path)
 
 REPEATS = 5
 
@@ -52,7 +53,7 @@ def main():
     lib, args = library_from_argv("[subdivision levels]")
     levels = int(args[0]) if args else 5
     me = build_mesh(levels)
-    me.calc_normals_split()
+    blender_compat.ensure_loop_normals(me)
     arrays = MeshArrays.from_blender(me)
     cores = os.cpu_count()
     print("mesh: Suzanne, subdivision level %d, triangulated: %d triangles, %d vertices, %d loops; %d cores" % (

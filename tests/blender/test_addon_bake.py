@@ -24,9 +24,11 @@ saved as a .blend in a temporary folder.
 """
 import os
 import re
+import subprocess
 import sys
 
 import bpy
+import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import test_addon_helpers as h  # noqa: E402
@@ -52,6 +54,33 @@ def _without_role(node_dump):
     from ndfbake import material_scan
     kind, props = node_dump
     return kind, dict(props, custom=[k for k in props["custom"] if k != material_scan.ROLE_KEY])
+
+
+def test_blender_decodes_the_map_as_the_command_line_does():
+    """The add-on bakes the pixels Blender decoded, `ndfbake bake` the file through OpenImageIO:
+    for the same 8-bit PNG every lobe texel of every level must agree to the last bit (EM breaks
+    a symmetric NDF's ties by rounding, so a last-bit difference can change the fit)."""
+    library, _ = h.arguments()
+    cli = os.path.join(os.path.dirname(library), "ndfbake")
+    h.expect(os.path.isfile(cli), "no command line beside the library: %s" % cli)
+    with h.scratch_dir() as directory:
+        png = h.write_normal_map(os.path.join(directory, "bumps.png"), "bumps", 64)
+        addon_out, cli_out = os.path.join(directory, "addon"), os.path.join(directory, "cli")
+        h.bake_image_file(png, addon_out, max_lobes=4, roughness=0.5)
+        subprocess.run([cli, "bake", png, "--out", cli_out, "--max-lobes", "4", "--brdf", "ggx:0.5", "--quiet"],
+                       check=True)
+        files = sorted(f for f in os.listdir(cli_out) if f.startswith("level") and f.endswith(".exr"))
+        h.expect(files and files == sorted(f for f in os.listdir(addon_out) if f.startswith("level")
+                                           and f.endswith(".exr")), "different lobe files: %s" % files)
+        for name in files:
+            pixels = []
+            for folder in (addon_out, cli_out):
+                image = bpy.data.images.load(os.path.join(folder, name))
+                pixels.append(np.array(image.pixels[:], dtype=np.float32))
+                bpy.data.images.remove(image)
+            h.expect(np.array_equal(pixels[0], pixels[1]), "%s differs: largest difference %g"
+                     % (name, float(np.abs(pixels[0] - pixels[1]).max())))
+        print("  %d lobe files identical" % len(files))
 
 
 def test_bake_adds_only_the_group_and_bypass():
@@ -1023,7 +1052,7 @@ def test_a_deleted_group_node_beside_a_renamed_one_is_baked_again():
 
 if __name__ == "__main__":
     h.import_addon()
-    h.run([test_bake_adds_only_the_group_and_bypass, test_failure_while_building_nodes_rolls_back,
+    h.run([test_blender_decodes_the_map_as_the_command_line_does, test_bake_adds_only_the_group_and_bypass, test_failure_while_building_nodes_rolls_back,
            test_operators_rebake_fewer_lobes_and_revert, test_cycles_lobes_narrowed_draws_the_eevee_lobes_everywhere,
            test_save_reopen_then_revert,
            test_bake_all_bakes_what_the_scene_renders, test_linked_inputs_are_carried_and_restored,

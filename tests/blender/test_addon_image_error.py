@@ -13,7 +13,7 @@ normal maps synthesized by the library, the interior HDR, 8 lobes), built at 128
   per-pixel RMSE in linear RGB, with the block error printed beside it.
   On each region where filtering matters (the ground beyond 8 m, the two far spheres) ndfbake's
   error must be at most half of the naive normal map's, in both engines (EEVEE Next, 4.2+:
-  printed, not asserted; EEVEE_ASSERTED says why). Every figure is printed,
+  printed and held to regression bounds; EEVEE_ASSERTED says why). Every figure is printed,
   also for the whole image and the near ground (held to regression bounds). The references are
   checked first: the far ground of the EEVEE reference must be brighter than the naive render
   (the bumps' steep slopes catch the ceiling light, which MIP-averaged normals lose), and the
@@ -60,6 +60,8 @@ REGIONS = ("ground_far", "spheres_far")   # where filtering matters; "all", "gro
 # far spheres 1.16; with the sun left in the world (sun_threshold off) the far ground renders
 # 0.227 against naive's 0.220. Cycles in 5.0 meets it (0.366 / 0.045).
 EEVEE_ASSERTED = bpy.app.version < (4, 2, 0)
+# What EEVEE Next is held to meanwhile: a margin over what it measured (6.01 / 1.16, whole image 1.26).
+EEVEE_NEXT_REGRESSION_BOUNDS = {"ground_far": 6.5, "spheres_far": 1.3, "all": 1.4}
 # The regions shown for information are held to regression bounds with a margin over what they
 # measured (EEVEE 0.511 on the whole image; Cycles 0.311 on the whole image, 0.243 on the near
 # ground). EEVEE's near ground has none: ndfbake renders it brighter than the reference there
@@ -129,10 +131,11 @@ def test_image_error_against_references():
                     bound = REGRESSION_BOUNDS.get((engine, region))
                     verdict, note = "info", "regression bound %.2f" % bound if bound else "no bound"
                 if engine == "eevee" and not EEVEE_ASSERTED:
-                    note += "; EEVEE Next: reported, not asserted"
+                    bound = EEVEE_NEXT_REGRESSION_BOUNDS.get(region)
+                    note += "; EEVEE Next: regression bound %s" % ("%.2f" % bound if bound else "none")
                 print("  %s %s, %s: ndfbake %.4f / naive %.4f = %.3f (%s)" % (
                     verdict, what, region, e["ndfbake"][key], e["naive"][key], ratio, note), flush=True)
-                if bound is not None and not ratio <= bound and (engine == "cycles" or EEVEE_ASSERTED):
+                if bound is not None and not ratio <= bound:
                     failures.append("%s on %s: ratio %.3f > %.2f" % (what, region, ratio, bound))
         h.expect(not failures, "over the bound: " + "; ".join(failures))
 

@@ -107,8 +107,7 @@ int write_header(exr_context_t context, int width, int height, exr_pixel_type_t 
           path);
     if (!rle) check(exr_set_zip_compression_level(context, part, kZlibLevel), path);
     for (const char* channel : {"R", "G", "B", "A"})
-        if (exr_add_channel(context, part, channel, type, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1) != EXR_ERR_SUCCESS)
-            check(EXR_ERR_INVALID_ARGUMENT, path);
+        check(exr_add_channel(context, part, channel, type, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1), path);
     for (const ExrAttribute& attribute : attributes) set_attribute(context, part, attribute, path);
     check(exr_write_header(context), path);
     return part;
@@ -137,7 +136,8 @@ void write_scanlines(exr_context_t context, int part, int width, int height, exr
             // The file stores the channels sorted by name (A, B, G, R): each reads its own offset.
             for (int c = 0; c < encoder.channel_count; ++c) {
                 exr_coding_channel_info_t& channel = encoder.channels[c];
-                const int offset = std::strchr("RGBA", channel.channel_name[0]) - "RGBA";
+                static constexpr char kInterleaved[] = "RGBA";
+                const auto offset = std::strchr(kInterleaved, channel.channel_name[0]) - kInterleaved;
                 channel.encode_from_ptr =
                     reinterpret_cast<const uint8_t*>(rgba + (size_t(chunk.start_y) * size_t(width)) * 4 + size_t(offset));
                 channel.user_pixel_stride = int32_t(4 * sizeof(T));

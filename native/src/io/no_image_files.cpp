@@ -1,5 +1,5 @@
 // The Blender add-on's library is built without OpenImageIO, so that it needs nothing but the C
-// and C++ runtimes and the OpenEXR core beside it: these take the place of the functions that
+// runtime (the OpenEXR core compiled in): these take the place of the functions that
 // read or write image files through OpenImageIO (io/image_files.cpp, io/normal_file_decode.cpp,
 // io/color_decode.cpp, io/normal_encode.cpp), and refuse.
 #include "io/color_decode.h"
