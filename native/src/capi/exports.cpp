@@ -131,6 +131,15 @@ WriteSettings to_write(const ndfb_write_options* o)
     return w;
 }
 
+// The write settings for a map from memory: its files name "memory" as their source where the
+// caller names none (ndfb_bake names the input file instead).
+WriteSettings to_memory_write(const ndfb_write_options* o)
+{
+    WriteSettings w = to_write(o);
+    if (w.source_name.empty()) w.source_name = "memory";
+    return w;
+}
+
 StageProgress to_progress(const ndfb_fit_options* o)
 {
     if (!o || !o->progress) return {};
@@ -432,8 +441,7 @@ NDFB_API ndfb_status ndfb_pyramid_write(ndfb_context ctx, ndfb_pyramid p, ndfb_n
         const LobePyramid& pyramid = pyramid_of(p);
         require(pyramid.source.width == map->decoded.map.width && pyramid.source.height == map->decoded.map.height,
                 "the pyramid was fitted to a map of another size");
-        WriteSettings write = to_write(options);
-        if (write.source_name.empty()) write.source_name = "memory";
+        const WriteSettings write = to_memory_write(options);
         // The files and report describe the fit the pyramid had; fit_options bring the progress
         // callback and the threads.
         PyramidSettings settings = pyramid.settings;
@@ -457,9 +465,7 @@ NDFB_API ndfb_status ndfb_bake_map(ndfb_context ctx, ndfb_normal_map map, const 
 {
     return guarded(ctx, [&] {
         require(ctx && map && out_dir && fit, "ndfb_bake_map: ctx, map, out_dir and fit must not be null");
-        WriteSettings settings = to_write(write);
-        if (settings.source_name.empty()) settings.source_name = "memory";
-        bake_map(map->decoded, out_dir, to_pyramid(fit), settings, to_progress(fit));
+        bake_map(map->decoded, out_dir, to_pyramid(fit), to_memory_write(write), to_progress(fit));
     });
 }
 
