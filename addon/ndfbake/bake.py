@@ -295,10 +295,6 @@ def _bake_error(error, job):
         return BakeError("CANCELLED", "bake of '%s' cancelled: no file and no node changed" % name)
     if error.status == native.ERROR_IO:
         return BakeError("OUTPUT_NOT_WRITABLE", "cannot write the lobe folder %s: %s" % (job.final_dir, error.message))
-    if error.status == native.ERROR_FILE_NOT_FOUND:
-        return BakeError("MISSING_FILE", error.message)
-    if error.status in (native.ERROR_UNSUPPORTED_FORMAT, native.ERROR_CORRUPT_FILE):
-        return BakeError("BAD_IMAGE", "the normal map of '%s' cannot be read: %s" % (name, error.message))
     if error.status == native.ERROR_OUT_OF_MEMORY:
         return BakeError("TOO_LARGE", error.message)
     return BakeError("NATIVE_ERROR", "%s (%s)" % (error.message, error.status_name))
