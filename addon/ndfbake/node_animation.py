@@ -15,6 +15,7 @@ such a material (LINKED_ANIMATION) before anything is changed.
 import bpy
 
 from . import blender_compat
+from .blender_compat import action_fcurves
 
 TEMPORARY_ACTION = "ndfbake temporary"
 
@@ -70,16 +71,12 @@ def tree_actions(material_tree):
     return actions
 
 
-def _fcurves(action, slot, create=False):
-    return blender_compat.action_fcurves(action, slot, create)
-
-
 def input_animated(material_tree, node, index):
     """Whether a keyframe curve (active action or NLA strip) or a driver of the tree or its
     material sets input `index` of `node`."""
     paths = set(_input_paths(node, node, [(index, index)]))
     if any(curve.data_path in paths for action, slot in tree_actions(material_tree)
-           for curve in _fcurves(action, slot)):
+           for curve in action_fcurves(action, slot)):
         return True
     sets, _ = _driver_sets(material_tree)
     return any(driver.data_path[len(prefix):] in paths for animation, prefix in sets
@@ -109,7 +106,7 @@ def _copy_properties(source, target, skip=()):
 
 
 def copy_fcurve(fcurves, source, data_path):
-    """A copy of `source` at `data_path` in `fcurves` (an action's, _fcurves), replacing any curve
+    """A copy of `source` at `data_path` in `fcurves` (an action's, action_fcurves), replacing any curve
     there: its settings (extrapolation, mute, lock, hide, colour…), its keys with their handles,
     easing and types, and its modifiers with their settings and envelope points."""
     existing = fcurves.find(data_path, index=source.array_index)
@@ -189,7 +186,7 @@ def copy_input_animation(material_tree, source, target, index_pairs, move):
         for action, slot in tree_actions(material_tree):
             if action.library is not None:
                 continue  # refused before the bake (LINKED_ANIMATION); never written
-            _move_curves(_fcurves(action, slot), paths, move,
+            _move_curves(action_fcurves(action, slot), paths, move,
                          keep_targets=animates_elsewhere(action, material_tree, target.name))
         _move_drivers(animation, paths, move)
     _retarget_variables(material_tree, paths, source.name)
@@ -237,7 +234,7 @@ def remove_node_animation(material_tree, node_name, clear_empty=True):
         animation.drivers.remove(fcurve)
     for action, slot in tree_actions(material_tree):
         if action.library is None and not animates_elsewhere(action, material_tree, node_name):
-            fcurves = _fcurves(action, slot)
+            fcurves = action_fcurves(action, slot)
             for fcurve in [f for f in fcurves if f.data_path.startswith(prefix)]:
                 fcurves.remove(fcurve)
     if clear_empty and not animation.drivers and animation.action is None and not animation.nla_tracks:
@@ -251,10 +248,10 @@ def remove_node(material_tree, node):
     kept = []
     try:
         for action, slot in tree_actions(material_tree):
-            curves = [f for f in _fcurves(action, slot) if f.data_path.startswith(prefix)]
+            curves = [f for f in action_fcurves(action, slot) if f.data_path.startswith(prefix)]
             if curves and animates_elsewhere(action, material_tree, node.name):
                 holder = bpy.data.actions.new(TEMPORARY_ACTION)
-                held = _fcurves(holder, blender_compat.new_action_slot(holder, "NODETREE"), create=True)
+                held = action_fcurves(holder, blender_compat.new_action_slot(holder, "NODETREE"), create=True)
                 kept.append((action, slot, holder, held))
                 for fcurve in curves:
                     copy_fcurve(held, fcurve, fcurve.data_path)
@@ -262,7 +259,7 @@ def remove_node(material_tree, node):
     finally:
         for action, slot, holder, held in kept:
             for fcurve in held:
-                copy_fcurve(_fcurves(action, slot, create=True), fcurve, fcurve.data_path)
+                copy_fcurve(action_fcurves(action, slot, create=True), fcurve, fcurve.data_path)
             bpy.data.actions.remove(holder)
 
 
@@ -271,4 +268,4 @@ def linked_curves(material_tree, node_name):
     prefix = node_prefix(node_name)
     return [action.name for action, slot in tree_actions(material_tree)
             if action.library is not None
-            and any(f.data_path.startswith(prefix) for f in _fcurves(action, slot))]
+            and any(f.data_path.startswith(prefix) for f in action_fcurves(action, slot))]
