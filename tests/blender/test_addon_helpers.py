@@ -40,12 +40,34 @@ def arguments():
     return library, zip_path
 
 
-def blender_command(script, *args):
-    """The command that runs `script` in a new background Blender like this one, `args` after
-    `--`: the binary, or this Python where Blender is the bpy module (no binary_path)."""
+# `blender -b BLEND --python SCRIPT -- ARGS` in the bpy module, which has no Blender binary: its
+# Python opens BLEND, runs SCRIPT and exits as exit_now does (argv: BLEND SCRIPT -- ARGS).
+_BPY_MODULE_LAUNCHER = """
+import os, runpy, sys
+import bpy
+sys.path.insert(0, %r)
+from test_addon_helpers import exit_now
+blend, script = sys.argv[1], sys.argv[2]
+bpy.ops.wm.open_mainfile(filepath=blend)
+sys.argv = [script] + sys.argv[3:]
+try:
+    runpy.run_path(script, run_name="__main__")
+    status = 0
+except SystemExit as e:
+    status = e.code if isinstance(e.code, int) else int(e.code is not None)
+exit_now(status)
+""" % HERE
+
+
+def blender_command(script, *args, blend=None):
+    """The command that runs `script` in a new background Blender like this one, on the file
+    `blend` if given, `args` after `--`: the binary, or this Python where Blender is the bpy module
+    (no binary_path)."""
     if bpy.app.binary_path:
-        return [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code", "1", "--python", script,
-                "--", *args]
+        return [bpy.app.binary_path, "-b", "--factory-startup", *([blend] if blend else []),
+                "--python-exit-code", "1", "--python", script, "--", *args]
+    if blend:
+        return [sys.executable, "-c", _BPY_MODULE_LAUNCHER, blend, script, "--", *args]
     return [sys.executable, script, "--", *args]
 
 
@@ -364,42 +386,13 @@ def render_pixels(scene, path):
     return load_pixels(path)
 
 
-# `blender -b BLEND --python SCRIPT -- ARGS` where the tests run in the bpy module (the official
-# 4.x/5.x wheels), which has no Blender binary: the module's Python opens BLEND and runs SCRIPT, and
-# exits with its status as exit_now does.
-_BPY_MODULE_LAUNCHER = """
-import atexit, os, runpy, sys
-import bpy
-blend, script = sys.argv[1], sys.argv[2]
-sys.dont_write_bytecode = True
-bpy.ops.wm.open_mainfile(filepath=blend)
-sys.argv = [script] + sys.argv[3:]
-try:
-    runpy.run_path(script, run_name="__main__")
-    status = 0
-except SystemExit as e:
-    status = e.code if isinstance(e.code, int) else int(e.code is not None)
-atexit._run_exitfuncs()
-sys.stdout.flush()
-sys.stderr.flush()
-os._exit(status)
-"""
-
-
 def run_bake_blend(blend, *args, timeout=120):
-    """examples/bake_blend.py on `blend` in a separate `blender -b` (or the bpy module's Python);
-    prints its result lines and returns (exit status, its whole output)."""
+    """examples/bake_blend.py on `blend` in a separate Blender (blender_command); prints its result
+    lines and returns (exit status, its whole output)."""
     library, _ = arguments()
-    env = dict(os.environ, NDFBAKE_LIBRARY=library)
-    script = os.path.join(REPO, "examples", "bake_blend.py")
-    if bpy.app.binary_path:
-        command = [bpy.app.binary_path, "-b", "--factory-startup", blend,
-                   "--python-expr", "import sys; sys.dont_write_bytecode = True",  # keep addon/ clean
-                   "--python", script]
-    else:
-        command = [sys.executable, "-c", _BPY_MODULE_LAUNCHER, blend, script]
-    proc = subprocess.run(command + ["--"] + list(args), env=env, capture_output=True, text=True,
-                          timeout=timeout)
+    env = dict(os.environ, NDFBAKE_LIBRARY=library, PYTHONDONTWRITEBYTECODE="1")  # keep addon/ clean
+    proc = subprocess.run(blender_command(os.path.join(REPO, "examples", "bake_blend.py"), *args, blend=blend),
+                          env=env, capture_output=True, text=True, timeout=timeout)
     lines = [l for l in proc.stdout.splitlines() if l.startswith(("baked", "FAILED", "reverted", "bake_blend"))]
     lines += [l for l in proc.stderr.splitlines() if l.startswith("bake_blend")]
     print("  bake_blend.py %s -> exit %d\n    %s" % (" ".join(args), proc.returncode, "\n    ".join(lines)),

@@ -20,7 +20,8 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from ndfb_mesh import library_from_argv, MeshArrays  # noqa: E402
-from test_tangents import exit_now, mirrored_suzanne  # noqa: E402
+from test_addon_helpers import exit_now  # noqa: E402
+from test_tangents import mirrored_suzanne  # noqa: E402
 from ndfbake import blender_compat  # noqa: E402  (ndfb_mesh put addon/ on the path)
 
 SIZE = 128

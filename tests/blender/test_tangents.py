@@ -11,7 +11,6 @@ imported with Blender's own importers) it compares per loop:
     coincident positions or zero UV area, where MikkTSpace copies or defaults frames).
 It also checks mirroring-safe splits on the mirrored Suzanne, and prints the counts compared.
 """
-import atexit
 import math
 import os
 import sys
@@ -22,6 +21,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from ndfb_mesh import library_from_argv, MeshArrays, blender_tangents, write_bmesh  # noqa: E402
+from test_addon_helpers import exit_now  # noqa: E402
 
 ANGLE_TOLERANCE = 1e-3
 FLT_MIN = np.float32(1.17549435e-38)
@@ -421,14 +421,6 @@ def main():
             print("  " + f)
         exit_now(1)
     print("all tangent comparisons passed")
-
-
-def exit_now(status):
-    """Exits without the interpreter's shutdown but its atexit functions: the bpy module (4.5's
-    wheel) can hang in its exit handlers (a thread pool's destructor)."""
-    atexit._run_exitfuncs()
-    sys.stdout.flush()
-    os._exit(status)
 
 
 if __name__ == "__main__":
