@@ -627,10 +627,12 @@ def main():
     return 1 if failed else 0
 
 
-if __name__ == "__main__":
+def run_as_script(main):
+    """Runs main() as a script: its status, or 1 on an exception, which Blender would print and
+    still exit 0 for; exits only on failure (so `blender -b` goes on to quit normally)."""
     try:
         code = main()
-    except Exception:  # a bug: Blender would print it and still exit 0
+    except Exception:
         import traceback
         traceback.print_exc()
         code = 1
@@ -638,3 +640,7 @@ if __name__ == "__main__":
     sys.stderr.flush()
     if code:
         os._exit(code)
+
+
+if __name__ == "__main__":
+    run_as_script(main)
