@@ -313,7 +313,11 @@ def expect(condition, message):
 
 
 def run(tests):
-    """Runs test functions, printing each one's result and time; exits non-zero on any failure."""
+    """Runs test functions, printing each one's result and time; exits non-zero on any failure.
+    NDFBAKE_TEST_ONLY=<substring> runs only the tests whose names contain it (for working on one)."""
+    only = os.environ.get("NDFBAKE_TEST_ONLY")
+    if only:
+        tests = [test for test in tests if only in test.__name__]
     failures = 0
     total = time.perf_counter()
     for test in tests:
@@ -361,6 +365,19 @@ def load_pixels(path):
     image.pixels.foreach_get(pixels)
     bpy.data.images.remove(image)
     return pixels.reshape(height, width, 4)
+
+
+def uniform_world(scene, name, color):
+    """A new world of one colour for `scene`: World.color, and the Background node where the world
+    has nodes (Blender 5.0 gives a new world a node tree, which then overrides World.color)."""
+    world = bpy.data.worlds.new(name)
+    world.color = color
+    if world.node_tree is not None:
+        background = next(n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
+        background.inputs["Color"].default_value = tuple(color) + (1.0,)
+        background.inputs["Strength"].default_value = 1.0
+    scene.world = world
+    return world
 
 
 def configure_render(scene, width, height, cycles_samples, eevee_samples=None):
