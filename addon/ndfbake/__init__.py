@@ -28,13 +28,13 @@ bl_info = {
 if "bpy" in locals():
     import importlib
     for _module in (blender_compat, native, image_pixels, node_animation, material_scan, scene_lod,  # noqa: F821
-                    nodes, lobe_folders, bake, operators, ui):  # noqa: F821
+                    node_builders, specular_split, nodes, lobe_folders, bake, operators, ui):  # noqa: F821
         importlib.reload(_module)
 
 import bpy  # noqa: E402
 
 from . import (bake, blender_compat, image_pixels, lobe_folders, material_scan, native,  # noqa: E402,F401
-               node_animation, nodes, operators, scene_lod, ui)
+               node_animation, node_builders, nodes, operators, scene_lod, specular_split, ui)
 
 
 def register():

@@ -6,9 +6,9 @@ length whose κ_j = (3R − R³)/(1 − R²). The encoding is linear: averaging 
 distributions. Two ways to get the texel a pixel needs:
 - level of detail from the scene (AtlasLayout + scene_lod.LodPlan, the default): lobe j's MIP atlas
   (`atlas_lobej.exr`, every fitted level framed in one image) is sampled at the level the
-  "NDFB Level of Detail" group computes from the view distance and angle (scene_lod.py), with
-  bilinear filtering done in nodes from four Closest lookups ("NDFB Atlas Taps", "NDFB
-  Bilinear") in each of the two levels around it, blended. Both engines; Cycles has no MIP levels.
+  "NDFB Level of Detail" group computes from the view distance and angle (scene_lod.py), with one
+  Linear lookup in each of the two levels around it ("NDFB Atlas UV" places it inside the
+  level's frame), blended. Both engines; Cycles has no MIP levels.
 - level 0 filtered by the renderer (`level00_lobej.exr`, Linear): EEVEE MIP-maps it itself;
   Cycles only averages its samples over the pixel.
 Per shading point and lobe ("NDFB vMF Lobe" group):
@@ -55,20 +55,21 @@ from dataclasses import dataclass, field
 
 import bpy
 
-from . import blender_compat, id_names, material_scan, node_animation, scene_lod
+from . import blender_compat, id_names, material_scan, node_animation, scene_lod, specular_split
+from .node_builders import (COLOR, FLOAT, GROUP_VERSION, TAG, VECTOR, _add_socket, _find_group, _group_with_io,
+                            _link, _math, _mix, _new_group, _vmath)
 
-GROUP_VERSION = 2
-TAG = "ndfbake"                       # ID/custom property marking what this add-on created
 LOBE_GROUP = "NDFB vMF Lobe v%d" % GROUP_VERSION
 GRAZING_GROUP = "NDFB Grazing Roughness v%d" % GROUP_VERSION
 LOD_GROUP = "NDFB Level of Detail v%d" % GROUP_VERSION
-TAPS_GROUP = "NDFB Atlas Taps v%d" % GROUP_VERSION
-BILINEAR_GROUP = "NDFB Bilinear v%d" % GROUP_VERSION
+ATLAS_UV_GROUP = "NDFB Atlas UV v%d" % GROUP_VERSION
+# Shared groups of earlier versions of this add-on (version 2), removed with the last bake using them.
+RETIRED_GROUPS = tuple("NDFB %s v2" % name for name in ("vMF Lobe", "Grazing Roughness", "Level of Detail",
+                                                         "Atlas Taps", "Bilinear"))
 LOD_INPUTS = ("Texels per Unit", "Pixel Angle", "Pixel Size")
 EEVEE_BSDF = "EEVEE BSDF"             # the group's second shader output (narrowed lobes)
 # BakeSettings.cycles_lobes: what the group's BSDF output (Cycles' view) draws.
 WIDENED, NARROWED = "WIDENED", "NARROWED"
-TAP_CORNERS = ("00", "10", "01", "11")  # x then y offset of a bilinear tap
 ATLAS_LOOKUP = "Atlas Level %d"       # the material group's atlas-table nodes (0: low, 1: high level)
 # An atlas table's name until bake._take_names names it after its group (atlas_table_name); no
 # "NDFB " name, so that it holds no name a group or table of the bake is to take.
@@ -90,6 +91,15 @@ COMPUTED_INPUTS = {"Normal", "Roughness"}
 EMISSION_COLOR = blender_compat.principled_input("Emission")
 EMISSION_INPUTS = {EMISSION_COLOR, "Emission Strength"}
 EMISSION_ALPHA = "Emission Alpha"    # the group's Mix Shader that weights the emission by Alpha
+# The specular split (specular_split.py): its node, the base BSDF and the Mix Shader weighting it by Alpha.
+SPECULAR_SPLIT, BASE_BSDF, BASE_ALPHA = "Specular Split", "Base BSDF", "Base Alpha"
+# What a specular-only lobe takes from the group, by kind; the rest of its Principled stays at the
+# default (coat, sheen, subsurface and transmission off).
+_SHARED_LOBE_INPUTS = {"Alpha", "Anisotropic", "Anisotropic Rotation", "Tangent", "Specular Tint"}
+SPECULAR_LOBE_INPUTS = {specular_split.CONDUCTOR: _SHARED_LOBE_INPUTS | {"Base Color"},
+                        specular_split.DIELECTRIC: _SHARED_LOBE_INPUTS | {"IOR", "Specular IOR Level"}}
+# What the base sets itself rather than take from the group.
+BASE_SET_INPUTS = {"Base Color", "Metallic", "Specular IOR Level", "Alpha"}
 
 
 def osl_status():
@@ -99,87 +109,18 @@ def osl_status():
     return False, "this Blender build has no OSL (bpy.app.build_options.cycles_osl is False): stock-node group"
 
 
-# ---- small builders ------------------------------------------------------------------------------
-
-def _new_group(name):
-    tree = bpy.data.node_groups.new(name, "ShaderNodeTree")
-    tree[TAG] = GROUP_VERSION
-    return tree
-
-
-def _group_with_io(name, inputs, outputs, span=(-900, 700)):
-    """A new tagged group with (socket type, name) inputs and outputs; returns the tree and its
-    Group Input and Group Output nodes (placed at x = span)."""
-    tree = _new_group(name)
-    for socket_type, socket_name in inputs:
-        _add_socket(tree, "INPUT", socket_type, socket_name)
-    for socket_type, socket_name in outputs:
-        _add_socket(tree, "OUTPUT", socket_type, socket_name)
-    gin = tree.nodes.new("NodeGroupInput")
-    gin.location = (span[0], 0)
-    gout = tree.nodes.new("NodeGroupOutput")
-    gout.location = (span[1], 0)
-    return tree, gin, gout
-
-
-FLOAT, COLOR, VECTOR = "NodeSocketFloat", "NodeSocketColor", "NodeSocketVector"
-
-
-def _add_socket(tree, in_out, socket_type, name):
-    return blender_compat.new_interface_socket(tree, in_out, socket_type, name)
-
-
-def _link(tree, source, target):
-    """Link an output socket to `target`, or set target's value when source is a number."""
-    if isinstance(source, (int, float)):
-        target.default_value = source
-    elif isinstance(source, tuple):
-        target.default_value = source
-    else:
-        tree.links.new(source, target)
-
-
-def _math(tree, operation, a, b=None, c=None, location=(0, 0), clamp=False):
-    node = tree.nodes.new("ShaderNodeMath")
-    node.operation = operation
-    node.use_clamp = clamp
-    node.location = location
-    for socket, value in zip(node.inputs, (a, b, c)):
-        if value is not None:
-            _link(tree, value, socket)
-    return node.outputs[0]
-
-
-def _vmath(tree, operation, a, b=None, c=None, scale=None, location=(0, 0), output=0):
-    node = tree.nodes.new("ShaderNodeVectorMath")
-    node.operation = operation
-    node.location = location
-    for socket, value in zip(node.inputs, (a, b, c)):
-        if value is not None:
-            _link(tree, value, socket)
-    if scale is not None:
-        _link(tree, scale, node.inputs["Scale"])
-    return node.outputs[output]
-
-
-def _find_group(name):
-    tree = bpy.data.node_groups.get(name)
-    if tree is not None and tree.get(TAG) == GROUP_VERSION and tree.bl_idname == "ShaderNodeTree":
-        return tree
-    return None
-
-
 # ---- shared helper groups ------------------------------------------------------------------------
 
 def lobe_group():
     """Decodes one lobe texel: inputs Lobe (RGB), Lobe Z (A), Roughness; outputs Weight, Normal
-    (tangent-space colour for a Normal Map node) and Roughness (widened)."""
+    (tangent-space colour for a Normal Map node), Roughness (widened) and Moment (α_j·r_j: the
+    lobes' moments sum to the texel's mean normal times its length)."""
     tree = _find_group(LOBE_GROUP)
     if tree is not None:
         return tree
     tree, gin, gout = _group_with_io(
         LOBE_GROUP, [(COLOR, "Lobe"), (FLOAT, "Lobe Z"), ("NodeSocketFloatFactor", "Roughness")],
-        [(FLOAT, "Weight"), (COLOR, "Normal"), (FLOAT, "Roughness")], (-1400, 1300))
+        [(FLOAT, "Weight"), (COLOR, "Normal"), (FLOAT, "Roughness"), (VECTOR, "Moment")], (-1400, 1300))
 
     sep = tree.nodes.new("ShaderNodeSeparateXYZ")  # colour -> (R, G, B)
     sep.location = (-1200, 100)
@@ -219,6 +160,7 @@ def lobe_group():
     tree.links.new(weight, gout.inputs["Weight"])
     tree.links.new(color, gout.inputs["Normal"])
     tree.links.new(roughness_out, gout.inputs["Roughness"])
+    tree.links.new(comb.outputs[0], gout.inputs["Moment"])
     return tree
 
 
@@ -271,19 +213,6 @@ def grazing_roughness_group():
     return tree
 
 
-def _mix(tree, data_type, factor, a, b, location):
-    """ShaderNodeMix: (1 − factor)·a + factor·b, for FLOAT or VECTOR data."""
-    node = tree.nodes.new("ShaderNodeMix")
-    node.data_type = data_type
-    node.clamp_factor = False
-    node.location = location
-    first = {"FLOAT": 2, "VECTOR": 4}[data_type]
-    _link(tree, factor, node.inputs[0])
-    _link(tree, a, node.inputs[first])
-    _link(tree, b, node.inputs[first + 1])
-    return node.outputs[{"FLOAT": 0, "VECTOR": 1}[data_type]]
-
-
 def level_of_detail_group():
     """Level = clamp(log2(footprint), 0, Max Level) with the footprint of scene_lod.py, from the
     distance to the camera and the angle of view at the shading point."""
@@ -314,71 +243,46 @@ def level_of_detail_group():
     return tree
 
 
-def atlas_taps_group():
-    """The four point lookups of bilinear filtering inside one level of a MIP atlas (native
-    bake/lobe_atlas.h; tests/native/test_lobe_atlas.cpp checks this addressing): inputs UV, the
-    level's frame X, Y (top-left, rows counted from the top) and size W, H, the atlas size, and
-    Repeat (1: the texture tiles, 0: it clamps); outputs UV 00/10/01/11 and the fractions Fx, Fy."""
-    tree = _find_group(TAPS_GROUP)
+def atlas_uv_group():
+    """Where one level of a MIP atlas (native bake/lobe_atlas.h; tests/native/test_lobe_atlas.cpp
+    checks this addressing) puts a texture coordinate: inputs UV, the level's frame X, Y (top-left,
+    rows counted from the top) and size W, H, the atlas size, and Repeat (1: the texture tiles, 0:
+    it clamps); output the atlas coordinate
+
+        u = (X + 1 + w_u·W) / Atlas Width,   v = (Atlas Height − 1 − Y − H + w_v·H) / Atlas Height,
+
+    w the coordinate wrapped (fract) or clamped to [0, 1]. A renderer's bilinear (Linear) lookup there
+    reads texel centres x + 0.5 of the level exactly as a lookup of the level's own file would, and
+    the frame's one-texel border (the wrapped or clamped edge) keeps it inside the level."""
+    tree = _find_group(ATLAS_UV_GROUP)
     if tree is not None:
         return tree
     tree, gin, gout = _group_with_io(
-        TAPS_GROUP,
+        ATLAS_UV_GROUP,
         [(VECTOR, "UV")] + [(FLOAT, n) for n in ("X", "Y", "W", "H", "Atlas Width", "Atlas Height", "Repeat")],
-        [(VECTOR, "UV " + c) for c in TAP_CORNERS] + [(FLOAT, "Fx"), (FLOAT, "Fy")], (-1200, 900))
+        [(VECTOR, "Atlas UV")], (-1000, 700))
     sep = tree.nodes.new("ShaderNodeSeparateXYZ")
-    sep.location = (-1000, 200)
+    sep.location = (-800, 200)
     tree.links.new(gin.outputs["UV"], sep.inputs[0])
-    aw, ah = gin.outputs["Atlas Width"], gin.outputs["Atlas Height"]
 
-    def axis(value, size, y):
-        wrapped = _mix(tree, "FLOAT", gin.outputs["Repeat"], _math(tree, "MINIMUM", _math(
-            tree, "MAXIMUM", value, 0.0, location=(-850, y)), 1.0, location=(-700, y)),
-            _math(tree, "FRACT", value, location=(-700, y - 100)), location=(-550, y))
-        texel = _math(tree, "MULTIPLY_ADD", wrapped, size, -0.5, location=(-400, y))
-        first = _math(tree, "FLOOR", texel, location=(-250, y))
-        return first, _math(tree, "SUBTRACT", texel, first, location=(-100, y - 100))
+    def wrapped(value, y):
+        clamped = _math(tree, "MINIMUM", _math(tree, "MAXIMUM", value, 0.0, location=(-650, y)), 1.0,
+                        location=(-500, y))
+        return _mix(tree, "FLOAT", gin.outputs["Repeat"], clamped, _math(tree, "FRACT", value, location=(-500, y - 100)),
+                    (-350, y))
 
-    x0, fx = axis(sep.outputs["X"], gin.outputs["W"], 300)
-    y0, fy = axis(sep.outputs["Y"], gin.outputs["H"], -100)
-    # Column X + 1 + x0, row (from the bottom) Atlas Height − 1 − Y − H + y0; centres at + 0.5.
-    column = _math(tree, "ADD", _math(tree, "ADD", gin.outputs["X"], 1.5, location=(-100, 400)), x0,
-                   location=(50, 400))
-    row_base = _math(tree, "SUBTRACT", _math(tree, "SUBTRACT", _math(tree, "SUBTRACT", ah, 0.5, location=(-250, -300)),
-                                                 gin.outputs["Y"], location=(-100, -300)),
-                     gin.outputs["H"], location=(50, -300))
-    row = _math(tree, "ADD", row_base, y0, location=(200, -200))
-    u0 = _math(tree, "DIVIDE", column, aw, location=(300, 400))
-    u1 = _math(tree, "DIVIDE", _math(tree, "ADD", column, 1.0, location=(200, 300)), aw, location=(350, 300))
-    v0 = _math(tree, "DIVIDE", row, ah, location=(350, -200))
-    v1 = _math(tree, "DIVIDE", _math(tree, "ADD", row, 1.0, location=(350, -300)), ah, location=(500, -300))
-    for name, (u, v), y in (("UV 00", (u0, v0), 300), ("UV 10", (u1, v0), 150), ("UV 01", (u0, v1), 0),
-                            ("UV 11", (u1, v1), -150)):
-        comb = tree.nodes.new("ShaderNodeCombineXYZ")
-        comb.location = (700, y)
-        tree.links.new(u, comb.inputs["X"])
-        tree.links.new(v, comb.inputs["Y"])
-        tree.links.new(comb.outputs[0], gout.inputs[name])
-    tree.links.new(fx, gout.inputs["Fx"])
-    tree.links.new(fy, gout.inputs["Fy"])
-    return tree
-
-
-def bilinear_group():
-    """(1 − Fy)·((1 − Fx)·00 + Fx·10) + Fy·((1 − Fx)·01 + Fx·11) of four RGBA lookups."""
-    tree = _find_group(BILINEAR_GROUP)
-    if tree is not None:
-        return tree
-    tree, gin, gout = _group_with_io(
-        BILINEAR_GROUP,
-        [io for c in TAP_CORNERS for io in ((COLOR, "Color " + c), (FLOAT, "Alpha " + c))]
-        + [(FLOAT, "Fx"), (FLOAT, "Fy")],
-        [(COLOR, "Color"), (FLOAT, "Alpha")], (-600, 400))
-    fx, fy = gin.outputs["Fx"], gin.outputs["Fy"]
-    for kind, data_type, y in (("Color", "VECTOR", 200), ("Alpha", "FLOAT", -200)):
-        bottom = _mix(tree, data_type, fx, gin.outputs[kind + " 00"], gin.outputs[kind + " 10"], (-300, y + 100))
-        top = _mix(tree, data_type, fx, gin.outputs[kind + " 01"], gin.outputs[kind + " 11"], (-300, y - 100))
-        tree.links.new(_mix(tree, data_type, fy, bottom, top, (0, y)), gout.inputs[kind])
+    column = _math(tree, "MULTIPLY_ADD", wrapped(sep.outputs["X"], 300), gin.outputs["W"],
+                   _math(tree, "ADD", gin.outputs["X"], 1.0, location=(-350, 450)), location=(-150, 350))
+    row_base = _math(tree, "SUBTRACT", _math(tree, "SUBTRACT", _math(
+        tree, "SUBTRACT", gin.outputs["Atlas Height"], 1.0, location=(-500, -350)), gin.outputs["Y"],
+        location=(-350, -350)), gin.outputs["H"], location=(-200, -350))
+    row = _math(tree, "MULTIPLY_ADD", wrapped(sep.outputs["Y"], -100), gin.outputs["H"], row_base,
+                location=(-50, -150))
+    comb = tree.nodes.new("ShaderNodeCombineXYZ")
+    comb.location = (300, 0)
+    tree.links.new(_math(tree, "DIVIDE", column, gin.outputs["Atlas Width"], location=(100, 300)), comb.inputs["X"])
+    tree.links.new(_math(tree, "DIVIDE", row, gin.outputs["Atlas Height"], location=(150, -150)), comb.inputs["Y"])
+    tree.links.new(comb.outputs[0], gout.inputs["Atlas UV"])
     return tree
 
 
@@ -479,7 +383,8 @@ def _uv_source(tree, gin, has_vector, location):
 
 
 def _atlas_levels(tree, gin, atlas, repeat, uv):
-    """The two levels the footprint falls between: per level the taps node, and the blend factor."""
+    """The two levels the footprint falls between: per level the atlas coordinate (atlas_uv_group),
+    and the blend factor. Computed once for every lobe: the lobes' atlases share one layout."""
     lod = tree.nodes.new("ShaderNodeGroup")
     lod.node_tree = level_of_detail_group()
     lod.location = (-2000, 400)
@@ -492,50 +397,45 @@ def _atlas_levels(tree, gin, atlas, repeat, uv):
                  location=(-1550, 500))
     blend = _math(tree, "SUBTRACT", level, low, location=(-1700, 300))
     table = atlas_table_group(PROVISIONAL_TABLE_NAME, atlas)  # Blender numbers it where taken
-    taps = []
+    coordinates = []
     for k, index in enumerate((low, high)):
         lookup = tree.nodes.new("ShaderNodeGroup")
         lookup.name = lookup.label = ATLAS_LOOKUP % k
         lookup.node_tree = table
         lookup.location = (-1550, 300 - 250 * k)
         tree.links.new(index, lookup.inputs["Level"])
-        tap = tree.nodes.new("ShaderNodeGroup")
-        tap.node_tree = atlas_taps_group()
-        tap.location = (-1350, 300 - 250 * k)
-        tree.links.new(uv, tap.inputs["UV"])
+        place = tree.nodes.new("ShaderNodeGroup")
+        place.node_tree = atlas_uv_group()
+        place.location = (-1350, 300 - 250 * k)
+        tree.links.new(uv, place.inputs["UV"])
         for key in ("X", "Y", "W", "H"):
-            tree.links.new(lookup.outputs[key], tap.inputs[key])
-        tap.inputs["Atlas Width"].default_value = float(atlas.width)
-        tap.inputs["Atlas Height"].default_value = float(atlas.height)
-        tap.inputs["Repeat"].default_value = 1.0 if repeat else 0.0
-        taps.append(tap)
-    return taps, blend
+            tree.links.new(lookup.outputs[key], place.inputs[key])
+        place.inputs["Atlas Width"].default_value = float(atlas.width)
+        place.inputs["Atlas Height"].default_value = float(atlas.height)
+        place.inputs["Repeat"].default_value = 1.0 if repeat else 0.0
+        coordinates.append(place.outputs["Atlas UV"])
+    return coordinates, blend
 
 
-def _sample_atlas(tree, image, taps, blend, j, y):
-    """Lobe j's RGBA at the shading point: bilinear in each of the two levels, blended."""
+def _sample_atlas(tree, image, coordinates, blend, j, y):
+    """Lobe j's RGBA at the shading point: the renderer's bilinear lookup in each of the two levels
+    (one Linear lookup a level, at atlas_uv_group's coordinate), blended. Measured against four
+    Closest lookups and bilinear weights in nodes (what this group did before): the same
+    image in Cycles, whose Linear lookup is plain bilinear; see README for EEVEE, which MIP-maps
+    Linear images."""
     colors, alphas = [], []
-    for k, tap in enumerate(taps):
-        bilinear = tree.nodes.new("ShaderNodeGroup")
-        bilinear.node_tree = bilinear_group()
-        bilinear.location = (-1000, y - 300 * k)
-        for i, corner in enumerate(TAP_CORNERS):
-            tex = tree.nodes.new("ShaderNodeTexImage")
-            tex.name = tex.label = "Lobe %d level %s %s" % (j, "low" if k == 0 else "high", corner)
-            tex.image = image
-            tex.interpolation = "Closest"  # the taps are texel centres; filtering is done in nodes
-            tex.extension = "EXTEND"
-            tex.location = (-1250, y - 300 * k - 60 * i)
-            tex.hide = True
-            tree.links.new(tap.outputs["UV " + corner], tex.inputs["Vector"])
-            tree.links.new(tex.outputs["Color"], bilinear.inputs["Color " + corner])
-            tree.links.new(tex.outputs["Alpha"], bilinear.inputs["Alpha " + corner])
-        tree.links.new(tap.outputs["Fx"], bilinear.inputs["Fx"])
-        tree.links.new(tap.outputs["Fy"], bilinear.inputs["Fy"])
-        colors.append(bilinear.outputs["Color"])
-        alphas.append(bilinear.outputs["Alpha"])
-    return (_mix(tree, "VECTOR", blend, colors[0], colors[1], (-850, y)),
-            _mix(tree, "FLOAT", blend, alphas[0], alphas[1], (-850, y - 150)))
+    for k, coordinate in enumerate(coordinates):
+        tex = tree.nodes.new("ShaderNodeTexImage")
+        tex.name = tex.label = "Lobe %d level %s" % (j, "low" if k == 0 else "high")
+        tex.image = image
+        tex.interpolation = "Linear"
+        tex.extension = "EXTEND"  # the frames hold the wrap; never read past the atlas
+        tex.location = (-1150, y - 200 * k)
+        tree.links.new(coordinate, tex.inputs["Vector"])
+        colors.append(tex.outputs["Color"])
+        alphas.append(tex.outputs["Alpha"])
+    return (_mix(tree, "VECTOR", blend, colors[0], colors[1], (-950, y)),
+            _mix(tree, "FLOAT", blend, alphas[0], alphas[1], (-950, y - 150)))
 
 
 def _sample_level0(tree, gin, image, image_texture, has_vector, j, y):
@@ -599,15 +499,19 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     names = {s.name for s in carried}
     if atlas is not None:
         uv = _uv_source(tree, gin, has_vector, (-2000, 100))
-        taps, blend = _atlas_levels(tree, gin, atlas, image_texture.extension == "REPEAT", uv)
+        coordinates, blend = _atlas_levels(tree, gin, atlas, image_texture.extension == "REPEAT", uv)
+
+    holder = principled if current is None else current
+    # Specular-only lobes over one base (specular_split), or whole copies (kind None).
+    kind = specular_split.lobe_kind(holder) if specular_split.may_split(principled, holder) else None
 
     # The outputs whose lobe BSDFs the group builds: (y offset of a lobe's BSDF, y of the sum).
     layout = ({"BSDF": (0, -200)} if cycles_lobes == WIDENED else {}) | {EEVEE_BSDF: (-450, -500)}
-    shaders, weights = {output: [] for output in layout}, []
+    shaders, weights, moments = {output: [] for output in layout}, [], []
     for j, image in enumerate(lobe_images):
         y = -900 * j
         if atlas is not None:
-            color, alpha = _sample_atlas(tree, image, taps, blend, j, y)
+            color, alpha = _sample_atlas(tree, image, coordinates, blend, j, y)
         else:
             color, alpha = _sample_level0(tree, gin, image, image_texture, has_vector, j, y)
 
@@ -619,14 +523,9 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         tree.links.new(alpha, dec.inputs["Lobe Z"])
         if "Roughness" in names:
             tree.links.new(gin.outputs["Roughness"], dec.inputs["Roughness"])
+        moments.append(dec.outputs["Moment"])
 
-        nm = tree.nodes.new("ShaderNodeNormalMap")
-        nm.space = "TANGENT"
-        nm.uv_map = normal_map.uv_map
-        nm.location = (-550, y - 150)
-        tree.links.new(dec.outputs["Normal"], nm.inputs["Color"])
-        tree.links.new(gin.outputs["Normal Strength"], nm.inputs["Strength"])
-
+        nm = _normal_map(tree, gin, normal_map, dec.outputs["Normal"], (-550, y - 150))
         grazing = tree.nodes.new("ShaderNodeGroup")
         grazing.node_tree = grazing_roughness_group()
         grazing.name = grazing.label = "Grazing %d" % j
@@ -636,27 +535,90 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
             tree.links.new(gin.outputs["Roughness"], grazing.inputs["Base Roughness"])
         else:
             grazing.inputs["Base Roughness"].default_value = dec.inputs["Roughness"].default_value
-        tree.links.new(nm.outputs["Normal"], grazing.inputs["Normal"])
+        tree.links.new(nm, grazing.inputs["Normal"])
 
         roughness = {"BSDF": dec.outputs["Roughness"], EEVEE_BSDF: grazing.outputs["Roughness"]}
         for output, (dy, _) in layout.items():
-            bsdf = _lobe_bsdf(tree, gin, principled, carried, roughness[output], nm.outputs["Normal"],
-                              "Lobe %d %s" % (j, output), (0, y + dy), multiscatter)
-            shaders[output].append(bsdf.outputs["BSDF"])
+            shaders[output].append(_lobe_bsdf(tree, gin, principled, carried, roughness[output], nm,
+                                              "Lobe %d %s" % (j, output), (0, y + dy), multiscatter, kind))
         weights.append(dec.outputs["Weight"])
 
-    emission = _emission(tree, gin, (1000 + 200 * count, -900))
+    x_end = 1000 + 200 * count
+    drawn_once = [_emission(tree, gin, (x_end, -900))]
+    if kind in (specular_split.DIELECTRIC, specular_split.BOTH):
+        drawn_once.append(_base_bsdf(tree, gin, principled, carried, normal_map, moments, names, (x_end, 600)))
     sums = {}
     for output, lobes in shaders.items():
-        y = layout[output][1]
-        add = tree.nodes.new("ShaderNodeAddShader")
-        add.location = (1200 + 200 * count, y)
-        tree.links.new(_weighted_sum(tree, lobes, weights, y), add.inputs[0])
-        tree.links.new(emission, add.inputs[1])
-        sums[output] = add.outputs["Shader"]
+        total = _weighted_sum(tree, lobes, weights, layout[output][1])
+        for k, shader in enumerate(drawn_once):
+            add = tree.nodes.new("ShaderNodeAddShader")
+            add.location = (x_end + 200 * (k + 1), layout[output][1])
+            tree.links.new(total, add.inputs[0])
+            tree.links.new(shader, add.inputs[1])
+            total = add.outputs["Shader"]
+        sums[output] = total
     tree.links.new(sums[EEVEE_BSDF], gout.inputs[EEVEE_BSDF])
     tree.links.new(sums.get("BSDF", sums[EEVEE_BSDF]), gout.inputs["BSDF"])  # NARROWED: EEVEE's lobes
     return tree
+
+
+def _normal_map(tree, gin, normal_map, color, location):
+    """A tangent-space Normal Map node like the original's (UV map, the group's Normal Strength) of
+    `color`; returns its Normal output."""
+    nm = tree.nodes.new("ShaderNodeNormalMap")
+    nm.space = "TANGENT"
+    nm.uv_map = normal_map.uv_map
+    nm.location = location
+    tree.links.new(color, nm.inputs["Color"])
+    tree.links.new(gin.outputs["Normal Strength"], nm.inputs["Strength"])
+    return nm.outputs["Normal"]
+
+
+def _base_bsdf(tree, gin, principled, carried, normal_map, moments, names, location):
+    """The one Principled BSDF that draws the material's diffuse (and subsurface) beneath the lobes
+    (specular_split): at the texel's mean normal, normalize(Σ_j α_j·r_j + 1e-5·ẑ) (+Z where the
+    moments cancel), the original roughness, no specular of its own; weighted by Alpha, whose
+    transparent remainder the lobes draw (each carries the Alpha)."""
+    total = moments[0]
+    for k, moment in enumerate(moments[1:], 1):
+        total = _vmath(tree, "ADD", total, moment, location=(location[0] - 1200 + 100 * k, location[1] + 300))
+    mean = _vmath(tree, "NORMALIZE", _vmath(tree, "ADD", total, (0.0, 0.0, 1e-5), location=(location[0] - 600,
+                                                                                             location[1] + 300)),
+                  location=(location[0] - 450, location[1] + 300))
+    color = _vmath(tree, "MULTIPLY_ADD", mean, (0.5, 0.5, 0.5), (0.5, 0.5, 0.5),
+                   location=(location[0] - 300, location[1] + 300))
+    normal = _normal_map(tree, gin, normal_map, color, (location[0] - 150, location[1] + 300))
+    split = tree.nodes.new("ShaderNodeGroup")
+    split.node_tree = specular_split.specular_split_group()
+    split.name = split.label = SPECULAR_SPLIT
+    split.location = (location[0] - 150, location[1] - 300)
+    for key in specular_split.SPLIT_INPUTS:
+        if key in names:
+            tree.links.new(gin.outputs[key], split.inputs[key])
+    tree.links.new(normal, split.inputs["Normal"])
+
+    bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
+    bsdf.name = bsdf.label = BASE_BSDF
+    bsdf.distribution = principled.distribution
+    bsdf.subsurface_method = principled.subsurface_method
+    bsdf.location = location
+    for socket in carried:
+        if socket.name in COMPUTED_INPUTS or socket.name in EMISSION_INPUTS or socket.name in BASE_SET_INPUTS:
+            continue
+        tree.links.new(gin.outputs[socket.name], bsdf.inputs[socket.identifier])
+    tree.links.new(split.outputs["Diffuse Color"], bsdf.inputs["Base Color"])
+    bsdf.inputs["Metallic"].default_value = 0.0
+    bsdf.inputs["Specular IOR Level"].default_value = 0.0
+    bsdf.inputs["Emission Strength"].default_value = 0.0
+    tree.links.new(normal, bsdf.inputs["Normal"])
+    if "Roughness" in gin.outputs:
+        tree.links.new(gin.outputs["Roughness"], bsdf.inputs["Roughness"])
+    weighted = tree.nodes.new("ShaderNodeMixShader")
+    weighted.name = weighted.label = BASE_ALPHA
+    weighted.location = (location[0] + 200, location[1])
+    tree.links.new(gin.outputs["Alpha"], weighted.inputs["Fac"])
+    tree.links.new(bsdf.outputs["BSDF"], weighted.inputs[2])
+    return weighted.outputs["Shader"]
 
 
 def _emission(tree, gin, location):
@@ -681,9 +643,22 @@ def _emission(tree, gin, location):
     return alpha.outputs["Shader"]
 
 
-def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location, multiscatter):
-    """A copy of the original Principled BSDF with the lobe's normal and roughness, emitting nothing
-    (the group draws the emission once: _emission)."""
+def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location, multiscatter, kind=None):
+    """Lobe j's shader: a copy of the original Principled BSDF with the lobe's normal and roughness,
+    emitting nothing (the group draws the emission once: _emission); with a specular_split kind,
+    only its specular reflection: the metal's (CONDUCTOR), the dielectric layer's over black
+    (DIELECTRIC), or both mixed by Metallic (BOTH)."""
+    if kind == specular_split.BOTH:
+        mix = tree.nodes.new("ShaderNodeMixShader")
+        mix.name = mix.label = name + " Metallic"
+        mix.location = (location[0] + 200, location[1])
+        tree.links.new(gin.outputs["Metallic"], mix.inputs["Fac"])
+        for slot, part in ((1, specular_split.DIELECTRIC), (2, specular_split.CONDUCTOR)):
+            tree.links.new(_lobe_bsdf(tree, gin, principled, carried, roughness, normal,
+                                      name if part == specular_split.CONDUCTOR else name + " Dielectric",
+                                      (location[0], location[1] - 300 * (slot - 1)), multiscatter, part),
+                           mix.inputs[slot])
+        return mix.outputs["Shader"]
     bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
     bsdf.name = bsdf.label = name
     # Multiple scattering: a widened GGX lobe loses the energy of light scattered more than
@@ -697,11 +672,18 @@ def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location
     for socket in carried:
         if socket.name in COMPUTED_INPUTS or socket.name in EMISSION_INPUTS:
             continue
+        if kind is not None and socket.name not in SPECULAR_LOBE_INPUTS[kind]:
+            continue
         tree.links.new(gin.outputs[socket.name], bsdf.inputs[socket.identifier])
+    if kind == specular_split.CONDUCTOR:
+        bsdf.inputs["Metallic"].default_value = 1.0
+    elif kind == specular_split.DIELECTRIC:
+        bsdf.inputs["Metallic"].default_value = 0.0
+        bsdf.inputs["Base Color"].default_value = (0.0, 0.0, 0.0, 1.0)  # no diffuse: the base draws it
     bsdf.inputs["Emission Strength"].default_value = 0.0  # the group emits once (_emission)
     tree.links.new(roughness, bsdf.inputs["Roughness"])
     tree.links.new(normal, bsdf.inputs["Normal"])
-    return bsdf
+    return bsdf.outputs["BSDF"]
 
 
 # Principled v2 (Blender 4.0+) has no Transmission Roughness: transmission takes Roughness.
@@ -1140,7 +1122,8 @@ def lobe_count(group_tree):
 def remove_unused_groups(names):
     """Removes the named node groups this add-on made once nothing uses them, then the groups they
     used (a material's atlas table, the shared helpers) if nothing else uses those either."""
-    pending = list(dict.fromkeys(names)) + [LOBE_GROUP, GRAZING_GROUP, LOD_GROUP, TAPS_GROUP, BILINEAR_GROUP]
+    pending = list(dict.fromkeys(names)) + [LOBE_GROUP, GRAZING_GROUP, LOD_GROUP, ATLAS_UV_GROUP,
+                                               specular_split.SPLIT_GROUP, *RETIRED_GROUPS]
     while pending:
         tree = bpy.data.node_groups.get(pending.pop(0))
         if tree is None or tree.get(TAG) is None or tree.users != 0:

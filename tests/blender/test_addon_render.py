@@ -14,6 +14,7 @@ uniform sky, keeps the original's energy within 3% once baked (0.885 before the 
 brdf.h's amplitude; see nodes.py). Image errors against
 references: test_addon_image_error.py.
 """
+import math
 import os
 import sys
 
@@ -32,9 +33,7 @@ def setup_scene():
     scene.camera = bpy.context.active_object
     bpy.ops.object.light_add(type="SUN", rotation=(0.6, 0.3, 0.4))
     bpy.context.active_object.data.energy = 4.0
-    world = bpy.data.worlds.new("World")
-    world.color = (0.05, 0.05, 0.05)
-    scene.world = world
+    h.uniform_world(scene, "World", (0.05, 0.05, 0.05))
     h.configure_render(scene, SIZE, SIZE, cycles_samples=4, eevee_samples=4)
     return scene
 
@@ -118,9 +117,7 @@ def test_white_furnace_keeps_the_energy_of_the_fine_normals():
         scene.camera = bpy.context.active_object
         scene.camera.data.type = "ORTHO"
         scene.camera.data.ortho_scale = 1.5
-        world = bpy.data.worlds.new("Furnace")
-        world.color = (1.0, 1.0, 1.0)
-        scene.world = world
+        h.uniform_world(scene, "Furnace", (1.0, 1.0, 1.0))
         h.configure_render(scene, 32, 32, cycles_samples=64)
 
         def mean(name):
@@ -135,7 +132,70 @@ def test_white_furnace_keeps_the_energy_of_the_fine_normals():
                  % (baked / plain))
 
 
+FURNACE_ELEVATIONS = (90.0, 45.0, 20.0, 10.0, 5.0, 2.0)  # degrees between the view and the plane
+FURNACE_BOUND = 0.02
+# Known misses, held to regression bounds (README, "White furnace"): (material, Principled
+# version) -> (the elevations below which the bound is missed, the regression bound there).
+# Principled v1 (3.x): the lobes' Multiscatter GGX against the original's GGX, which loses more
+# energy at grazing views (3.4: 1.10 at 10°, 1.13 at 5°). Principled v2 dielectric: the base's
+# diffuse takes out Karis's approximation of the specular layer's albedo, not Cycles' own
+# (5.0: 1.023 at 20°, 0.977 at 10°, 1.028 at 2°).
+FURNACE_MISSES = {("metal", 1): (45.0, 0.15), ("dielectric", 1): (45.0, 0.15), ("dielectric", 2): (45.0, 0.035)}
+
+
+def test_flat_map_furnace_at_every_view_angle():
+    """A flat normal map's baked material reflects what the plain one does, under a uniform white
+    sky, seen from above down to 2° above the plane: a metal (conductor lobes only) and a
+    dielectric (in Principled v2 the base's diffuse under specular-only lobes; in v1 whole
+    copies). Cycles, an orthographic camera on a large plane, 32² pixels at 64 spp; the means
+    within 2% but where FURNACE_MISSES says otherwise."""
+    from ndfbake import bake
+    with h.scratch_dir() as directory:
+        h.reset_scene()
+        flat = np.zeros((16, 16, 3))
+        flat[..., 2] = 1.0
+        image_path = h.save_normals_png(flat, os.path.join(directory, "flat.png"))
+        materials = {"metal": h.normal_mapped_material("Flat Metal", image_path, roughness=0.3, metallic=1.0),
+                     "dielectric": h.normal_mapped_material("Flat Dielectric", image_path, roughness=0.4)}
+        principled = materials["metal"].node_tree.nodes["Principled BSDF"]
+        principled.inputs["Base Color"].default_value = (0.9, 0.8, 0.7, 1.0)
+        version = 2 if "Specular IOR Level" in principled.inputs else 1
+        plane = h.plane_with(materials["metal"], size=200.0)
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "scene.blend"))
+        scene = bpy.context.scene
+        bpy.ops.object.camera_add()
+        camera = scene.camera = bpy.context.active_object
+        camera.data.type = "ORTHO"
+        camera.data.ortho_scale = 0.5
+        h.uniform_world(scene, "Furnace", (1.0, 1.0, 1.0))
+        h.configure_render(scene, 32, 32, cycles_samples=64)
+
+        def means(material, label):
+            plane.data.materials[0] = material
+            found = []
+            for elevation in FURNACE_ELEVATIONS:
+                e = math.radians(elevation)
+                camera.location = (0.0, -10.0 * math.cos(e), 10.0 * math.sin(e))
+                camera.rotation_euler = (math.pi / 2 - e, 0.0, 0.0)
+                found.append(float(render(scene, "CYCLES", os.path.join(directory, "%s.exr" % label)).mean()))
+            return np.array(found)
+
+        for kind, material in materials.items():
+            plain = means(material, kind + "-plain")
+            result = bake.bake_material(material, bake.BakeSettings(max_lobes=4))
+            baked = means(material, kind + "-baked")
+            ratio = baked / plain
+            below, regression = FURNACE_MISSES.get((kind, version), (0.0, FURNACE_BOUND))
+            bounds = np.where(np.array(FURNACE_ELEVATIONS) < below, regression, FURNACE_BOUND)
+            print("  %s, Principled v%d (%s): plain %s, baked %s; ratio %s" % (
+                kind, version, result.summary.split(";")[0], np.round(plain, 4), np.round(baked, 4),
+                np.round(ratio, 4)))
+            h.expect(np.all(np.isfinite(baked)) and np.all(np.abs(ratio - 1.0) < bounds),
+                     "%s: the baked flat map reflects %s of the plain material's furnace at elevations %s"
+                     " (bounds %s)" % (kind, np.round(ratio, 4), FURNACE_ELEVATIONS, bounds))
+
+
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_eevee_and_cycles_render_the_baked_material, test_emission_is_drawn_once_as_the_principled_draws_it,
-           test_white_furnace_keeps_the_energy_of_the_fine_normals])
+           test_white_furnace_keeps_the_energy_of_the_fine_normals, test_flat_map_furnace_at_every_view_angle])
