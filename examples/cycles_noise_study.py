@@ -1,6 +1,6 @@
 """Where Cycles' 16-spp error on the demo scene comes from: noise against the same material's
 converged render, bias of that render against the reference, under a chosen world and lobe choice.
-The README's "Open problems" (image error in Cycles) quotes its figures.
+docs/rendering.md ("Open problems": image error in Cycles under a low sun) quotes its figures.
 
     blender -b --factory-startup --python-exit-code 1 --python examples/cycles_noise_study.py -- \
         --out DIR [--world NAME] [--sun-lamp] [--reference-samples 512] [--converged-samples 256] \

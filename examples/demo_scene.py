@@ -13,8 +13,8 @@ Image Texture -> Normal Map -> Principled BSDF, Non-Color, Linear), glossy (roug
 lit by Blender's interior HDR with its brightest spot (52 degrees up) ahead: the steep slopes of
 the ground's bumps catch it as a far glitter patch, and the spheres show it as highlights that a
 flattened normal map loses (--world picks another of Blender's studio worlds, its brightest spot
-turned to the same place; under sunset the low sun backlights the far spheres, README "Image
-error"). A plain cube (no normal map) and an unrendered normal-mapped material stand in for what
+turned to the same place; under sunset the low sun backlights the far spheres, docs/rendering.md
+"Image error"). A plain cube (no normal map) and an unrendered normal-mapped material stand in for what
 a bake must leave alone.
 
 Into DIR: demo_scene.blend (baked at the end; the lobe textures in <material>.ndfbake/ beside
@@ -76,7 +76,7 @@ SPHERE_TILE = 0.5
 FAR_SPHERES = ("Sphere Far", "Sphere Farthest")
 FAR_GROUND = 8.0                 # metres from the camera: where the "far ground" region begins
 MAX_SUPERSAMPLED_WIDTH = 1024
-MAX_LOBES = 8                    # the bumps' ring of 45-degree slopes needs them (README "Image error")
+MAX_LOBES = 8                    # the bumps' ring of 45-degree slopes needs them (docs/rendering.md "Image error")
 EXPOSURE = -1.5                  # stops, for the PNGs (Filmic); the EXRs are scene-linear
 
 

@@ -18,7 +18,7 @@ mkdir -p "$out"
 "$ndfbake" synth weave --size 512 --out "$out/weave.png"
 "$ndfbake" bake "$out/weave.png" --out "$out/weave-lobes" --brdf ggx:0.4
 python3 "$root/examples/summarize_report.py" "$out/weave-lobes/report.json"
-# The same bake refined for its BRDF (README "Refining for the BRDF"): lower error, longer fit.
+# The same bake refined for its BRDF (docs/fit.md, "Refining for the BRDF"): lower error, longer fit.
 echo
 echo "The same, refined for ggx:0.4 (--refine):"
 "$ndfbake" bake "$out/weave.png" --out "$out/weave-lobes-refined" --brdf ggx:0.4 --refine --quiet

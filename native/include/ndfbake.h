@@ -65,7 +65,7 @@ typedef enum ndfb_fit_method {
     NDFB_FIT_PER_LEVEL = 0,    /* every level from all the fine normals it covers (Han §7.1): the
                                   reference the default is measured against */
     NDFB_FIT_HIERARCHICAL = 1  /* every level from the binned normals of the level below (default):
-                                  as accurate, 4-5x faster (README, "Speed of a bake") */
+                                  as accurate, 4-5x faster (docs/speed.md, "Bake speed") */
 } ndfb_fit_method;
 typedef enum ndfb_representation {
     NDFB_REPR_VMF_MIXTURE = 0, /* the budgeted vMF mixture (what bake writes) */
@@ -125,7 +125,7 @@ typedef struct ndfb_fit_options {
     uint32_t starts;
     /* Non-zero: after EM, move every texel's lobes to where their convolved mixture is closest to
        the exact effective BRDF of `brdf` (Levenberg-Marquardt on the relative L2 error; see
-       README "Refining for the BRDF"). Lower error for that BRDF (a fifth less on a 1024² fBm map
+       docs/fit.md, "Refining for the BRDF"). Lower error for that BRDF (a fifth less on a 1024² fBm map
        at GGX roughness 0.3) at 100-300x the fitting time (a refined fit also skips the
        hierarchical fit's shortcuts for texels of few normals); default 0. */
     int32_t refine;
@@ -172,7 +172,7 @@ NDFB_API const char* ndfb_last_error(ndfb_context ctx);
 NDFB_API const char* ndfb_status_name(ndfb_status status);
 /* Non-zero where the library reads and writes image files (through OpenImageIO): the full library,
  * which `ndfbake` and the tests use. The Blender add-on's library is built without image files, to
- * need nothing beyond the C runtime (README, "Blender versions"); it writes the lobe
+ * need nothing beyond the C runtime (docs/blender-versions.md); it writes the lobe
  * textures (OpenEXR) and report.json, but ndfb_normal_map_load, ndfb_bake, ndfb_describe_image,
  * ndfb_normal_map_save, ndfb_bench and a write_options color_path fail there with
  * NDFB_ERROR_UNSUPPORTED_FORMAT and a message naming what to call instead: decode the image in

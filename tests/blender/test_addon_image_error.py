@@ -52,10 +52,10 @@ REGIONS = ("ground_far", "spheres_far")   # where filtering matters; "all", "gro
 # nodes.grazing_roughness_group); Cycles 0.323 / 0.294, and 0.34 / 0.38 over three seeds
 # (examples/cycles_noise_study.py). The scene needs 8 lobes: with 4, EEVEE's far ground measured
 # 0.80. Under the sunset world Cycles misses (0.88 / 1.23: its low sun backlights the far spheres,
-# whose naive error is then the world's sampling noise; README "Image error").
+# whose naive error is then the world's sampling noise; docs/rendering.md "Image error").
 # EEVEE Next (4.2 and later) misses it, so it is held to the regression bounds below instead: it
 # extracts the world's brightest spot into a sun light (World.sun_threshold), which the lobes then reflect with
-# the grazing-view bias Cycles shows (README "Bias at grazing views"): Blender 5.0, 2026-11-28,
+# the grazing-view bias Cycles shows (docs/rendering.md "Grazing views"): Blender 5.0, 2026-11-28,
 # far ground 0.441 against the reference's 0.244 (ratio 6.0, naive being within 0.035 of it),
 # far spheres 1.16; with the sun left in the world (sun_threshold off) the far ground renders
 # 0.227 against naive's 0.220. Cycles in 5.0 meets it (0.366 / 0.045).
@@ -65,7 +65,7 @@ EEVEE_NEXT_REGRESSION_BOUNDS = {"ground_far": 6.5, "spheres_far": 1.3, "all": 1.
 # The regions shown for information are held to regression bounds with a margin over what they
 # measured (EEVEE 0.511 on the whole image; Cycles 0.311 on the whole image, 0.243 on the near
 # ground). EEVEE's near ground has none: ndfbake renders it brighter than the reference there
-# (1.06 of naive's block error; README, "Image error").
+# (1.06 of naive's block error; docs/rendering.md, "Image error").
 REGRESSION_BOUNDS = {("eevee", "all"): 0.7, ("cycles", "all"): 0.5, ("cycles", "ground_near"): 0.5}
 MIN_WINDOWS = 40                          # 4x4 windows a region needs for its figure to mean anything
 CONVERGED_SAMPLES = 128                   # Cycles Lobes compared where noise no longer decides

@@ -397,7 +397,7 @@ TEST_F(HostileInputs, TruncatedFilesAreCorrupt)
 
 TEST_F(HostileInputs, ExrWithNanInfNegativeAndHugeValuesIsRepairedAndCounted)
 {
-    // Such values are a documented input, not an error: each texel is repaired (README: NaN/Inf
+    // Such values are a documented input, not an error: each texel is repaired (docs/lobe-format.md: NaN/Inf
     // or too short -> +Z, z < 0 -> -z, then normalized), counted, and the bake's output is finite.
     const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
     std::vector<float> rgb(8 * 8 * 3);

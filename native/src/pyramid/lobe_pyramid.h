@@ -71,7 +71,7 @@ struct PyramidSettings {
     // after EM. Measured: at Blinn-Phong 128 on the six synthetic patterns, 4 lobes' mean error at
     // levels 4 and 6 falls by a quarter (0.26 → 0.20 of Toksvig's); on a 1024² fBm map at GGX
     // roughness 0.3, the mean over levels 1+ from 0.250 to 0.201 (the fit then 0.16 s → 23 s on
-    // 2 cores, 2026-11-26; README). `ndfbake bench`: 60–350× the default fit's time (which takes
+    // 2 cores, 2026-11-26; docs/fit.md). `ndfbake bench`: 60–350× the default fit's time (which takes
     // shortcuts a refined fit does not: kKmeansFootprint). The refinement sees the texel's fine
     // normals, at most kRefineSampleCap of them.
     bool refine = false;
