@@ -91,11 +91,13 @@ COMPUTED_INPUTS = {"Normal", "Roughness"}
 EMISSION_COLOR = blender_compat.principled_input("Emission")
 EMISSION_INPUTS = {EMISSION_COLOR, "Emission Strength"}
 EMISSION_ALPHA = "Emission Alpha"    # the group's Mix Shader that weights the emission by Alpha
-# The specular split (specular_split.py): its node, the base BSDF and the Mix Shader weighting it by Alpha.
-SPECULAR_SPLIT, BASE_BSDF, BASE_ALPHA = "Specular Split", "Base BSDF", "Base Alpha"
+# The specular split (specular_split.py): its node, the base BSDF, the Mix Shaders of the Alpha (one
+# per output: "<ALPHA_MIX> BSDF", "<ALPHA_MIX> EEVEE BSDF").
+SPECULAR_SPLIT, BASE_BSDF, ALPHA_MIX = "Specular Split", "Base BSDF", "Alpha"
 # What a specular-only lobe takes from the group, by kind; the rest of its Principled stays at the
 # default (coat, sheen, subsurface and transmission off).
-_SHARED_LOBE_INPUTS = {"Alpha", "Anisotropic", "Anisotropic Rotation", "Tangent", "Specular Tint"}
+_SHARED_LOBE_INPUTS = {"Anisotropic", "Anisotropic Rotation", "Tangent", "Specular Tint", "Thin Film Thickness",
+                       "Thin Film IOR"}
 SPECULAR_LOBE_INPUTS = {specular_split.CONDUCTOR: _SHARED_LOBE_INPUTS | {"Base Color"},
                         specular_split.DIELECTRIC: _SHARED_LOBE_INPUTS | {"IOR", "Specular IOR Level"}}
 # What the base sets itself rather than take from the group.
@@ -544,22 +546,43 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         weights.append(dec.outputs["Weight"])
 
     x_end = 1000 + 200 * count
-    drawn_once = [_emission(tree, gin, (x_end, -900))]
+    emission = _emission(tree, gin, (x_end, -900))
+    base = None
     if kind in (specular_split.DIELECTRIC, specular_split.BOTH):
-        drawn_once.append(_base_bsdf(tree, gin, principled, carried, normal_map, moments, names, (x_end, 600)))
+        base = _base_bsdf(tree, gin, principled, carried, normal_map, moments, names, (x_end, 600))
     sums = {}
     for output, lobes in shaders.items():
-        total = _weighted_sum(tree, lobes, weights, layout[output][1])
-        for k, shader in enumerate(drawn_once):
-            add = tree.nodes.new("ShaderNodeAddShader")
-            add.location = (x_end + 200 * (k + 1), layout[output][1])
-            tree.links.new(total, add.inputs[0])
-            tree.links.new(shader, add.inputs[1])
-            total = add.outputs["Shader"]
-        sums[output] = total
+        y = layout[output][1]
+        total = _weighted_sum(tree, lobes, weights, y)
+        if base is not None:
+            total = _add_shader(tree, total, base, (x_end + 200, y))
+        if kind is not None:  # split lobes carry no Alpha: the group mixes the transparency in once
+            total = _alpha_over(tree, gin, total, "%s %s" % (ALPHA_MIX, output), (x_end + 400, y))
+        sums[output] = _add_shader(tree, total, emission, (x_end + 600, y))
     tree.links.new(sums[EEVEE_BSDF], gout.inputs[EEVEE_BSDF])
     tree.links.new(sums.get("BSDF", sums[EEVEE_BSDF]), gout.inputs["BSDF"])  # NARROWED: EEVEE's lobes
     return tree
+
+
+def _add_shader(tree, a, b, location):
+    add = tree.nodes.new("ShaderNodeAddShader")
+    add.location = location
+    tree.links.new(a, add.inputs[0])
+    tree.links.new(b, add.inputs[1])
+    return add.outputs["Shader"]
+
+
+def _alpha_over(tree, gin, shader, name, location):
+    """Alpha·shader + (1 − Alpha)·Transparent: what a Principled BSDF does with its Alpha."""
+    transparent = tree.nodes.new("ShaderNodeBsdfTransparent")
+    transparent.location = (location[0], location[1] - 150)
+    mix = tree.nodes.new("ShaderNodeMixShader")
+    mix.name = mix.label = name
+    mix.location = location
+    tree.links.new(gin.outputs["Alpha"], mix.inputs["Fac"])
+    tree.links.new(transparent.outputs["BSDF"], mix.inputs[1])
+    tree.links.new(shader, mix.inputs[2])
+    return mix.outputs["Shader"]
 
 
 def _normal_map(tree, gin, normal_map, color, location):
@@ -577,8 +600,8 @@ def _normal_map(tree, gin, normal_map, color, location):
 def _base_bsdf(tree, gin, principled, carried, normal_map, moments, names, location):
     """The one Principled BSDF that draws the material's diffuse (and subsurface) beneath the lobes
     (specular_split): at the texel's mean normal, normalize(Σ_j α_j·r_j + 1e-5·ẑ) (+Z where the
-    moments cancel), the original roughness, no specular of its own; weighted by Alpha, whose
-    transparent remainder the lobes draw (each carries the Alpha)."""
+    moments cancel), the original roughness, no specular of its own, opaque (the group mixes the
+    Alpha in once: _alpha_over)."""
     total = moments[0]
     for k, moment in enumerate(moments[1:], 1):
         total = _vmath(tree, "ADD", total, moment, location=(location[0] - 1200 + 100 * k, location[1] + 300))
@@ -613,12 +636,7 @@ def _base_bsdf(tree, gin, principled, carried, normal_map, moments, names, locat
     tree.links.new(normal, bsdf.inputs["Normal"])
     if "Roughness" in gin.outputs:
         tree.links.new(gin.outputs["Roughness"], bsdf.inputs["Roughness"])
-    weighted = tree.nodes.new("ShaderNodeMixShader")
-    weighted.name = weighted.label = BASE_ALPHA
-    weighted.location = (location[0] + 200, location[1])
-    tree.links.new(gin.outputs["Alpha"], weighted.inputs["Fac"])
-    tree.links.new(bsdf.outputs["BSDF"], weighted.inputs[2])
-    return weighted.outputs["Shader"]
+    return bsdf.outputs["BSDF"]
 
 
 def _emission(tree, gin, location):
