@@ -79,6 +79,8 @@ HALF_INV_KAPPA_RESOLUTION = 4e-4      # native/src/io/lobe_exr.h kHalfInvKappaRe
                                       # writes half floats)
 # cos θ is floored here (θ ≈ 89.9°) so that tan²θ stays finite where a lobe faces away.
 GRAZING_MIN_COSINE = 1e-3
+# C of grazing_roughness_group, per group output (the engine that draws it).
+GRAZING_NARROWING = {"BSDF": 1.0, EEVEE_BSDF: 1.0}
 EEVEE_OUTPUT = "ndfbake EEVEE Output"   # the Material Output (target EEVEE) a bake may add
 GROUP_NODE_OFFSET = 250               # the group node sits this far above its Principled BSDF
 # The Principled BSDF's settings that are no sockets: kept in the bake record, for Revert to make
@@ -167,10 +169,11 @@ def lobe_group():
 
 
 def grazing_roughness_group():
-    """EEVEE's roughness for a widened lobe: inputs Roughness (widened, α′ = Roughness²), Base
-    Roughness (the original's, α) and Normal (the lobe's, world space); output Roughness with
+    """A widened lobe's roughness narrowed toward grazing views: inputs Roughness (widened, α′ =
+    Roughness²), Base Roughness (the original's, α), Normal (the lobe's, world space) and
+    Narrowing (C, GRAZING_NARROWING by output); output Roughness with
 
-        α″² = max(α′² / (1 + α′² tan²θ), α²),   θ between the view and the lobe's normal.
+        α″² = max(α′² / (1 + C·α′² tan²θ), α²),   θ between the view and the lobe's normal.
 
     Why: a widened GGX lobe loses far more of its light at grazing views in EEVEE than the fine
     normals' narrow lobes do (the far ground of the demo scene under sunset rendered 25% darker
@@ -191,7 +194,7 @@ def grazing_roughness_group():
         return tree
     tree, gin, gout = _group_with_io(
         GRAZING_GROUP, [("NodeSocketFloatFactor", "Roughness"), ("NodeSocketFloatFactor", "Base Roughness"),
-                        (VECTOR, "Normal")], [(FLOAT, "Roughness")], (-1000, 900))
+                        (VECTOR, "Normal"), (FLOAT, "Narrowing")], [(FLOAT, "Roughness")], (-1000, 900))
     geometry = tree.nodes.new("ShaderNodeNewGeometry")
     geometry.location = (-1000, -300)
     cosine = _math(tree, "MAXIMUM", _vmath(tree, "DOT_PRODUCT", geometry.outputs["Incoming"], gin.outputs["Normal"],
@@ -207,7 +210,8 @@ def grazing_roughness_group():
 
     widened2 = alpha2(gin.outputs["Roughness"], 200)
     base2 = alpha2(gin.outputs["Base Roughness"], 0)
-    stretch = _math(tree, "MULTIPLY_ADD", widened2, tan2, 1.0, location=(100, 100))
+    stretch = _math(tree, "MULTIPLY_ADD", _math(tree, "MULTIPLY", widened2, gin.outputs["Narrowing"],
+                                                location=(-50, 100)), tan2, 1.0, location=(100, 100))
     narrowed2 = _math(tree, "MAXIMUM", _math(tree, "DIVIDE", widened2, stretch, location=(250, 150)), base2,
                       location=(400, 100))
     tree.links.new(_math(tree, "SQRT", _math(tree, "SQRT", narrowed2, location=(550, 100)), location=(700, 100)),
@@ -508,7 +512,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     kind = specular_split.lobe_kind(holder) if specular_split.may_split(principled, holder) else None
 
     # The outputs whose lobe BSDFs the group builds: (y offset of a lobe's BSDF, y of the sum).
-    layout = ({"BSDF": (0, -200)} if cycles_lobes == WIDENED else {}) | {EEVEE_BSDF: (-450, -500)}
+    layout = {"BSDF": (0, -200), EEVEE_BSDF: (-450, -500)}
     shaders, weights, moments = {output: [] for output in layout}, [], []
     for j, image in enumerate(lobe_images):
         y = -900 * j
@@ -528,20 +532,22 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         moments.append(dec.outputs["Moment"])
 
         nm = _normal_map(tree, gin, normal_map, dec.outputs["Normal"], (-550, y - 150))
-        grazing = tree.nodes.new("ShaderNodeGroup")
-        grazing.node_tree = grazing_roughness_group()
-        grazing.name = grazing.label = "Grazing %d" % j
-        grazing.location = (-300, y - 450)
-        tree.links.new(dec.outputs["Roughness"], grazing.inputs["Roughness"])
-        if "Roughness" in names:
-            tree.links.new(gin.outputs["Roughness"], grazing.inputs["Base Roughness"])
-        else:
-            grazing.inputs["Base Roughness"].default_value = dec.inputs["Roughness"].default_value
-        tree.links.new(nm, grazing.inputs["Normal"])
-
-        roughness = {"BSDF": dec.outputs["Roughness"], EEVEE_BSDF: grazing.outputs["Roughness"]}
         for output, (dy, _) in layout.items():
-            shaders[output].append(_lobe_bsdf(tree, gin, principled, carried, roughness[output], nm,
+            roughness = dec.outputs["Roughness"]
+            if output == EEVEE_BSDF or cycles_lobes == NARROWED:
+                grazing = tree.nodes.new("ShaderNodeGroup")
+                grazing.node_tree = grazing_roughness_group()
+                grazing.name = grazing.label = "Grazing %d %s" % (j, output)
+                grazing.location = (-300, y + dy - 150)
+                tree.links.new(dec.outputs["Roughness"], grazing.inputs["Roughness"])
+                if "Roughness" in names:
+                    tree.links.new(gin.outputs["Roughness"], grazing.inputs["Base Roughness"])
+                else:
+                    grazing.inputs["Base Roughness"].default_value = dec.inputs["Roughness"].default_value
+                tree.links.new(nm, grazing.inputs["Normal"])
+                grazing.inputs["Narrowing"].default_value = GRAZING_NARROWING[output]
+                roughness = grazing.outputs["Roughness"]
+            shaders[output].append(_lobe_bsdf(tree, gin, principled, carried, roughness, nm,
                                               "Lobe %d %s" % (j, output), (0, y + dy), multiscatter, kind))
         weights.append(dec.outputs["Weight"])
 
@@ -560,7 +566,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
             total = _alpha_over(tree, gin, total, "%s %s" % (ALPHA_MIX, output), (x_end + 400, y))
         sums[output] = _add_shader(tree, total, emission, (x_end + 600, y))
     tree.links.new(sums[EEVEE_BSDF], gout.inputs[EEVEE_BSDF])
-    tree.links.new(sums.get("BSDF", sums[EEVEE_BSDF]), gout.inputs["BSDF"])  # NARROWED: EEVEE's lobes
+    tree.links.new(sums["BSDF"], gout.inputs["BSDF"])
     return tree
 
 

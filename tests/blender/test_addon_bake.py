@@ -220,9 +220,9 @@ def _lobe_roughness_sources(tree, output):
 
 
 def test_cycles_lobes_narrowed_draws_the_eevee_lobes_everywhere():
-    """Cycles Lobes: Narrowed builds the narrowed lobes only and both outputs draw them (Cycles
-    through the user's output, EEVEE through its own); a re-bake with Widened puts the widened
-    lobes back on the BSDF output; bad values are refused."""
+    """Cycles Lobes: Narrowed gives Cycles' lobes (the user's output) a grazing narrowing of their
+    own (nodes.GRAZING_NARROWING["BSDF"]) beside EEVEE's (its own output); a re-bake with Widened
+    gives Cycles the widened lobes back; bad values are refused."""
     from ndfbake import bake, nodes
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
@@ -233,15 +233,19 @@ def test_cycles_lobes_narrowed_draws_the_eevee_lobes_everywhere():
         group_node = material.node_tree.nodes["ndfbake"]
         tree = group_node.node_tree
         cycles, eevee = (_lobe_roughness_sources(tree, output) for output in ("BSDF", nodes.EEVEE_BSDF))
-        h.expect(cycles == eevee and len(cycles) == result.lobes == _principled_count(tree, nodes.EEVEE_BSDF),
+        h.expect(len(cycles) == len(eevee) == result.lobes == _principled_count(tree)
+                 == _principled_count(tree, nodes.EEVEE_BSDF) and not set(cycles.values()) & set(eevee.values()),
                  "Cycles' lobes %s, EEVEE's %s, %d lobes" % (cycles, eevee, result.lobes))
-        h.expect(_principled_count(tree) == 0, "widened lobes built that nothing draws")
-        h.expect(all(tree.nodes[source].node_tree == nodes.grazing_roughness_group() for source in cycles.values()),
-                 "a lobe's roughness is not the grazing group's: %s" % cycles)
+        for output, sources in (("BSDF", cycles), (nodes.EEVEE_BSDF, eevee)):
+            narrowing = {tree.nodes[source].inputs["Narrowing"].default_value for source in sources.values()}
+            h.expect(all(tree.nodes[source].node_tree == nodes.grazing_roughness_group() for source in sources.values())
+                     and narrowing == {nodes.GRAZING_NARROWING[output]},
+                     "%s: a lobe's roughness is not the grazing group's at its constant: %s, %s"
+                     % (output, sources, narrowing))
         h.expect(material.node_tree.get_output_node("CYCLES").inputs["Surface"].links[0].from_node == group_node,
                  "Cycles does not draw the group")
 
-        bake.bake_material(material, bake.BakeSettings(max_lobes=4))
+        bake.bake_material(material, bake.BakeSettings(max_lobes=4, cycles_lobes=nodes.WIDENED))
         tree = material.node_tree.nodes["ndfbake"].node_tree
         cycles, eevee = (_lobe_roughness_sources(tree, output) for output in ("BSDF", nodes.EEVEE_BSDF))
         h.expect(len(cycles) == len(eevee) == _principled_count(tree) and not set(cycles) & set(eevee),

@@ -169,14 +169,15 @@ def test_decode_group_matches_the_rule_in_both_engines():
 GRAZING_ROUGHNESS = (0.3, 0.5, 0.7, 0.9)       # widened roughness, one column each
 GRAZING_TILT_DEG = (0.0, 45.0, 75.0, 89.0)      # the lobe normal's angle from the view, one row each
 GRAZING_BASE = 0.25
+GRAZING_C = 2.5                                  # the Narrowing input
 
 
-def grazing_reference(roughness, tilt_deg, base):
-    """α″² = max(α′² / (1 + α′² tan²θ), α²), from nodes.grazing_roughness_group's docstring."""
+def grazing_reference(roughness, tilt_deg, base, narrowing):
+    """α″² = max(α′² / (1 + C·α′² tan²θ), α²), from nodes.grazing_roughness_group's docstring."""
     widened2, base2 = roughness ** 4, base ** 4
     c = max(np.cos(np.radians(tilt_deg)), 1e-3)
     tan2 = (1.0 - c * c) / (c * c)
-    return max(widened2 / (1.0 + widened2 * tan2), base2) ** 0.25
+    return max(widened2 / (1.0 + narrowing * widened2 * tan2), base2) ** 0.25
 
 
 def test_grazing_group_matches_its_formula_in_both_engines():
@@ -197,6 +198,7 @@ def test_grazing_group_matches_its_formula_in_both_engines():
                 group.node_tree = nodes.grazing_roughness_group()
                 group.inputs["Roughness"].default_value = roughness
                 group.inputs["Base Roughness"].default_value = GRAZING_BASE
+                group.inputs["Narrowing"].default_value = GRAZING_C
                 group.inputs["Normal"].default_value = (np.sin(np.radians(tilt)), 0.0, np.cos(np.radians(tilt)))
                 emission = tree.nodes.new("ShaderNodeEmission")
                 tree.links.new(group.outputs["Roughness"], emission.inputs["Strength"])
@@ -207,7 +209,7 @@ def test_grazing_group_matches_its_formula_in_both_engines():
         scene.camera = bpy.context.active_object
         scene.camera.data.type = "ORTHO"
         scene.camera.data.ortho_scale = 8.0
-        want = np.array([[grazing_reference(r, t, GRAZING_BASE) for r in GRAZING_ROUGHNESS]
+        want = np.array([[grazing_reference(r, t, GRAZING_BASE, GRAZING_C) for r in GRAZING_ROUGHNESS]
                          for t in GRAZING_TILT_DEG])
         h.expect(float(np.abs(want - np.array(GRAZING_ROUGHNESS)[None, :]).max()) > 0.3,
                  "the grid does not exercise the narrowing")
