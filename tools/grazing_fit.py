@@ -1,0 +1,407 @@
+"""Offline study: a per-lobe correction for ndfbake's vMF lobes at grazing views (issue 24, points 2-3).
+
+What is modelled (all in the tangent frame of the flat geometric surface, Ng = +z; F = 1, i.e. a
+white metal; the view v = (sin θv, 0, cos θv)):
+
+Reference, the normal map ("the map"): a texel's fine normals n are distributed vMF(μ, κ) over the
+surface (Han et al. 2007, eq. 4: the vMF lobe fitted to the texel's NDF). Every fine normal shades
+with its own narrow GGX BSDF about itself and nothing masks one fine normal from another; each fine
+normal's 1/(n·v) cancels its own projected area, so the pixel's radiance is the plain surface
+average
+
+    L_map(v) = E_{n ~ vMF(μ,κ)} [ ∫ f_α(n'; l, v) (n'·l)+ [l·Ng > 0] L(l) dl ],
+
+    f_α(n; l, v) = D_α(h) G2_α(l, v) / (4 (n·l)(n·v)) · 1/E_α(n·v)     (Walter et al. 2007, eq. 20;
+                                                                        D eq. 33 (GGX))
+    G2 = 1 / (1 + Λ(v) + Λ(l)),  Λ(x) = (sqrt(1 + α² tan²θx) − 1)/2   (Heitz 2014, eq. 99 and
+                                                                        eq. 72: height-correlated
+                                                                        Smith, as Cycles 4.x)
+    1/E_α(n·v): Cycles 4.x's Multiscatter GGX energy compensation for F = 1 (bsdf_microfacet.h,
+                microfacet_ggx_preserve_energy: weight·(1 + (1−E)/E)); E_α(μ) the single-scatter
+                directional albedo, tabulated here by Monte Carlo.
+
+n' is n after Cycles' ensure_valid_specular_reflection(Ng, v, n) (kernel/closure/bsdf_util.h,
+applied to every glossy closure's normal when the material's bump-map correction is on, the
+default): a fine normal whose mirror direction falls below min(0.9·v·Ng, 0.01) above the geometric
+horizon is rotated toward Ng, in the plane of n and Ng, until its mirror direction is at that
+height. So no fine normal faces away from the view (n'·v > 0 follows), and fine normals tilted away
+from the view at grazing views all reflect the horizon. Light from below the geometric horizon
+(l·Ng ≤ 0) is dropped, as Cycles' reflection closures do (and the plane itself occludes it).
+
+Closure, what ndfbake draws: one Multiscatter GGX closure about μ' = bend(μ) with
+α'² = min(α² + 1.5/κ, 1) (Han 2007 eq. 10-12: convolving the NDF with the vMF; ndfbake's
+kGgxVmfWidening = 1.5), same f, same horizon rule, weight 1 per lobe (the lobe weight α_j
+multiplies both sides alike).
+
+Both are linear in the lighting, so each is sampled once as a weighted set of light directions
+("kernel": f·cos/pdf weights, visible-normal sampling, Heitz 2018) and evaluated under Blender's
+8 studio worlds (rotated so that the brightest spot lies at a chosen azimuth relative to the
+mirror direction) and probe lights.
+
+The correction (docs/grazing-fit.md): see correction() below.
+
+Run: python3 tools/grazing_fit.py --out DIR   (a few minutes on 2 cores)
+"""
+import argparse
+import glob
+import json
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+WIDENING = 1.5                 # native/src/math/brdf.h kGgxVmfWidening
+WORLD_DIR = "/usr/share/blender/datafiles/studiolights/world"
+WORLDS = ("city", "courtyard", "forest", "interior", "night", "studio", "sunrise", "sunset")
+WORLD_W, WORLD_H = 512, 256    # the worlds are box-downsampled 2x to this (0.7° texels)
+BPY_PYTHON = os.path.expanduser("~/.cache/ndfbake/bpy-5.0/bin/python")
+CACHE = os.path.expanduser("~/.cache/ndfbake/grazing_worlds_%dx%d.npz" % (WORLD_W, WORLD_H))
+
+
+# ---------------------------------------------------------------------------------------------
+# GGX pieces
+def smith_lambda(alpha2, c):
+    c = np.clip(c, 1e-7, 1.0)
+    return 0.5 * (np.sqrt(1.0 + alpha2 * (1.0 - c * c) / (c * c)) - 1.0)
+
+
+def basis(n):
+    """Orthonormal (t, b) for unit vectors n[..., 3] (Duff et al. 2017)."""
+    s = np.where(n[..., 2] >= 0, 1.0, -1.0)
+    a = -1.0 / (s + n[..., 2])
+    b = n[..., 0] * n[..., 1] * a
+    t = np.stack([1 + s * n[..., 0] ** 2 * a, s * b, -s * n[..., 0]], -1)
+    bb = np.stack([b, s + n[..., 1] ** 2 * a, -n[..., 1]], -1)
+    return t, bb
+
+
+def sample_vndf(vl, alpha, u1, u2):
+    """Heitz 2018 visible-normal sampling of isotropic GGX; vl: local view (z = normal)."""
+    alpha = np.asarray(alpha)[..., None]
+    vh = np.concatenate([alpha * vl[..., :2], vl[..., 2:]], -1)
+    vh = vh / np.linalg.norm(vh, axis=-1, keepdims=True)
+    l2 = vh[..., 0] ** 2 + vh[..., 1] ** 2
+    inv = np.where(l2 > 1e-14, 1.0 / np.sqrt(np.maximum(l2, 1e-30)), 0.0)
+    t1v = np.stack([-vh[..., 1] * inv, vh[..., 0] * inv, 0 * l2], -1)
+    t1v[..., 0] = np.where(l2 > 1e-14, t1v[..., 0], 1.0)
+    t2v = np.cross(vh, t1v)
+    r = np.sqrt(u1)
+    phi = 2 * np.pi * u2
+    p1 = r * np.cos(phi)
+    s = 0.5 * (1 + vh[..., 2])
+    p2 = (1 - s) * np.sqrt(np.maximum(1 - p1 * p1, 0)) + s * r * np.sin(phi)
+    p3 = np.sqrt(np.maximum(0.0, 1 - p1 * p1 - p2 * p2))
+    nh = p1[..., None] * t1v + p2[..., None] * t2v + p3[..., None] * vh
+    ne = np.concatenate([alpha * nh[..., :2], np.maximum(1e-7, nh[..., 2:])], -1)
+    return ne / np.linalg.norm(ne, axis=-1, keepdims=True)
+
+
+def strat2(n, rng):
+    """n = k*k jittered-stratified points in [0,1)^2."""
+    k = int(round(np.sqrt(n)))
+    i, j = np.meshgrid(np.arange(k), np.arange(k), indexing="ij")
+    return ((i.ravel() + rng.random(k * k)) / k, (j.ravel() + rng.random(k * k)) / k)
+
+
+def reflect_kernel(v, n, alpha, u1, u2):
+    """GGX sampled about normals n[..., 3] for view v[..., 3] (same shape); returns light dirs l
+    and weights f·(n·l)/pdf = G2/G1(v) (F = 1), 0 where l is below n's or Ng's horizon."""
+    t, b = basis(n)
+    vl = np.stack([(v * t).sum(-1), (v * b).sum(-1), (v * n).sum(-1)], -1)
+    h = sample_vndf(vl, alpha, u1, u2)
+    hw = h[..., :1] * t + h[..., 1:2] * b + h[..., 2:] * n
+    l = 2 * (v * hw).sum(-1, keepdims=True) * hw - v
+    a2 = np.asarray(alpha) ** 2
+    cv = np.clip(vl[..., 2], 1e-7, 1)
+    cl = (l * n).sum(-1)
+    lv = smith_lambda(a2, cv)
+    w = (1 + lv) / (1 + lv + smith_lambda(a2, np.maximum(cl, 1e-7)))
+    w = np.where((cl > 0) & (l[..., 2] > 0), w, 0.0)
+    return l, w
+
+
+_E_TABLE = None
+E_MU = np.linspace(0.0, 1.0, 33)
+E_ROUGH = np.linspace(0.0, 1.0, 33)    # sqrt(α), as Cycles' table
+
+
+def albedo_table():
+    """Single-scatter albedo E(μ, r), r = sqrt(α), of GGX with F = 1 (no geometric horizon)."""
+    global _E_TABLE
+    if _E_TABLE is not None:
+        return _E_TABLE
+    rng = np.random.default_rng(7)
+    u1, u2 = strat2(4096, rng)
+    tab = np.zeros((len(E_MU), len(E_ROUGH)))
+    for i, mu in enumerate(E_MU):
+        mu = max(mu, 1e-3)
+        v = np.array([np.sqrt(1 - mu * mu), 0.0, mu])
+        for j, r in enumerate(E_ROUGH):
+            a = max(r * r, 1e-4)
+            vv = np.broadcast_to(v, (len(u1), 3))
+            n = np.broadcast_to(np.array([0, 0, 1.0]), (len(u1), 3))
+            _, w = reflect_kernel(vv, n, np.full(len(u1), a), u1, u2)
+            tab[i, j] = w.mean()
+    _E_TABLE = tab
+    return tab
+
+
+def albedo(mu, alpha):
+    tab = albedo_table()
+    x = np.clip(mu, 0, 1) * (len(E_MU) - 1)
+    y = np.clip(np.sqrt(alpha), 0, 1) * (len(E_ROUGH) - 1)
+    x0 = np.minimum(x.astype(int), len(E_MU) - 2)
+    y0 = np.minimum(y.astype(int), len(E_ROUGH) - 2)
+    fx, fy = x - x0, y - y0
+    return ((tab[x0, y0] * (1 - fx) + tab[x0 + 1, y0] * fx) * (1 - fy)
+            + (tab[x0, y0 + 1] * (1 - fx) + tab[x0 + 1, y0 + 1] * fx) * fy)
+
+
+def bend(ng_v, n):
+    """Cycles' ensure_valid_specular_reflection(Ng = +z, I = v, N = n) (bsdf_util.h)."""
+    v = ng_v
+    r = 2 * (n * v).sum(-1, keepdims=True) * n - v
+    iz = v[..., 2]
+    thr = np.minimum(0.9 * iz, 0.01)
+    ok = r[..., 2] >= thr
+    x = n.copy()
+    x[..., 2] = 0
+    ln = np.linalg.norm(x, axis=-1, keepdims=True)
+    x = np.where(ln > 1e-12, x / np.maximum(ln, 1e-30), n)
+    ix = (v * x).sum(-1)
+    a = ix * ix + iz * iz
+    b = 2 * (a + iz * thr)
+    c = (thr + iz) ** 2
+    d = np.sqrt(np.maximum(b * b - 4 * a * c, 0))
+    nz2 = np.where(ix < 0, 0.25 * (b + d) / a, 0.25 * (b - d) / a)
+    nb = np.sqrt(np.maximum(1 - nz2, 0))[..., None] * x + np.sqrt(np.maximum(nz2, 0))[..., None] * np.array([0, 0, 1.0])
+    return np.where(ok[..., None], n, nb)
+
+
+def sample_vmf(mu, kappa, u, phi):
+    """Directions vMF(mu, kappa) from stratified (u, phi) in [0,1)^2 (Wood 1994 inversion)."""
+    w = 1 + np.log(u + (1 - u) * np.exp(-2 * kappa)) / kappa if kappa < 1e7 else np.ones_like(u)
+    w = np.clip(w, -1, 1)
+    s = np.sqrt(np.maximum(1 - w * w, 0))
+    t, b = basis(mu[None, :])
+    a = 2 * np.pi * phi
+    return (s * np.cos(a))[:, None] * t + (s * np.sin(a))[:, None] * b + w[:, None] * mu[None, :]
+
+
+def view_dir(theta_v):
+    return np.array([np.sin(theta_v), 0.0, np.cos(theta_v)])
+
+
+def kernel_map(theta_v, mu, kappa, alpha, m=1024, k=16, seed=0, use_bend=True):
+    """The normal map's kernel: light dirs l[N,3], weights w[N] (radiance = mean(w L(l)))."""
+    rng = np.random.default_rng(seed)
+    v = view_dir(theta_v)
+    un, pn = strat2(m, rng)
+    n = sample_vmf(mu, kappa, un, pn)
+    if use_bend:
+        n = bend(np.broadcast_to(v, n.shape), n)
+    nv = np.repeat(n, k, 0)
+    u1, u2 = strat2(k, rng)
+    # rotate the per-normal stratification by a per-normal random shift (Cranley-Patterson)
+    s1, s2 = rng.random((m, 1)), rng.random((m, 1))
+    u1 = ((u1[None, :] + s1) % 1).ravel()
+    u2 = ((u2[None, :] + s2) % 1).ravel()
+    vv = np.broadcast_to(v, nv.shape)
+    l, w = reflect_kernel(vv, nv, np.full(len(nv), alpha), u1, u2)
+    cos_nv = np.clip((nv * vv).sum(-1), 0, 1)
+    w = np.where(cos_nv > 0, w / albedo(cos_nv, np.full(len(nv), alpha)), 0.0)
+    return l, w
+
+
+def kernel_closure(theta_v, mu, alpha_c, n=4096, seed=1, use_bend=True):
+    rng = np.random.default_rng(seed)
+    v = view_dir(theta_v)
+    m = mu / np.linalg.norm(mu)
+    if use_bend:
+        m = bend(v[None], m[None])[0]
+    u1, u2 = strat2(n, rng)
+    nv = np.broadcast_to(m, (len(u1), 3))
+    vv = np.broadcast_to(v, nv.shape)
+    l, w = reflect_kernel(vv, nv, np.full(len(u1), alpha_c), u1, u2)
+    cnv = max(float(m @ v), 0.0)
+    w = w / albedo(np.array([cnv]), np.array([alpha_c]))[0] if cnv > 0 else 0 * w
+    return l, w
+
+
+# ---------------------------------------------------------------------------------------------
+# Lighting
+_CONVERT = r"""
+import bpy, numpy as np, sys
+out = {}
+for name in sys.argv[sys.argv.index('--') + 1:-1]:
+    im = bpy.data.images.load('%s/%s.exr' % (WORLD_DIR, name))
+    w, h = im.size
+    px = np.empty(w * h * 4, np.float32)
+    im.pixels.foreach_get(px)
+    out[name] = px.reshape(h, w, 4)[::-1, :, :3]
+np.savez_compressed(sys.argv[-1], **out)
+"""
+
+
+def load_worlds():
+    """Blender's studio worlds as [H, W, 3] float arrays, row 0 = zenith side, box-downsampled to
+    WORLD_W x WORLD_H; converted once (through the bpy module's Python) and cached."""
+    if not os.path.exists(CACHE):
+        raw = CACHE + ".raw.npz"
+        script = _CONVERT.replace("WORLD_DIR", repr(WORLD_DIR))
+        subprocess.run([BPY_PYTHON, "-c", script, "--"] + list(WORLDS) + [raw], check=True)
+        data = np.load(raw)
+        small = {}
+        for name in WORLDS:
+            img = data[name].astype(np.float64)
+            h, w, _ = img.shape
+            fy, fx = h // WORLD_H, w // WORLD_W
+            small[name] = img.reshape(WORLD_H, fy, WORLD_W, fx, 3).mean((1, 3)).astype(np.float32)
+        np.savez_compressed(CACHE, **small)
+        os.remove(raw)
+    data = np.load(CACHE)
+    return {name: data[name] for name in WORLDS}
+
+
+def luminance(img):
+    return img[..., 0] * 0.2126 + img[..., 1] * 0.7152 + img[..., 2] * 0.0722
+
+
+def brightest_azimuth(lum):
+    """atan2(y, x) of a world's brightest texel, in Blender's lookup u = 0.5 - atan2(y, x)/2pi."""
+    iy, ix = np.unravel_index(np.argmax(lum), lum.shape)
+    u = (ix + 0.5) / lum.shape[1]
+    return (0.5 - u) * 2 * np.pi, iy
+
+
+def lookup(lum, l, rotation):
+    """Bilinear lookup of a luminance map at directions l[N,3], the world turned by `rotation` about
+    z (direction d is looked up at azimuth atan2(d) + rotation)."""
+    h, w = lum.shape
+    az = np.arctan2(l[:, 1], l[:, 0]) + rotation
+    u = (0.5 - az / (2 * np.pi)) % 1.0
+    el = np.arcsin(np.clip(l[:, 2], -1, 1))
+    vv = 0.5 - el / np.pi                       # 0 at the zenith (row 0)
+    x = u * w - 0.5
+    y = np.clip(vv * h - 0.5, 0, h - 1.001)
+    x0 = np.floor(x).astype(int)
+    y0 = np.floor(y).astype(int)
+    fx, fy = x - x0, y - y0
+    x0 %= w
+    x1 = (x0 + 1) % w
+    return ((lum[y0, x0] * (1 - fx) + lum[y0, x1] * fx) * (1 - fy)
+            + (lum[y0 + 1, x0] * (1 - fx) + lum[y0 + 1, x1] * fx) * fy)
+
+
+SUN_THRESHOLD = 10.0   # texels brighter than this are drawn as point lights (exact BSDF), the
+                       # rest by Monte Carlo: suns of 34000 in a 0.7° texel make sampled
+                       # estimates noisy by 5-50% at 65k samples
+
+
+def ggx_eval(n, v, alpha, ls):
+    """f·(n·l)·[l·Ng > 0] of Multiscatter GGX (F = 1) about normals n[M,3] for view v[3] at light
+    directions ls[S,3]; returns [M,S]."""
+    a2 = alpha * alpha
+    cv = np.clip(n @ v, 0.0, 1.0)[:, None]
+    cl = n @ ls.T
+    h = ls[None, :, :] + v[None, None, :]
+    h = h / np.linalg.norm(h, axis=-1, keepdims=True)
+    ch = (h * n[:, None, :]).sum(-1)
+    d = a2 / (np.pi * (ch * ch * (a2 - 1) + 1) ** 2)
+    g2 = 1.0 / (1 + smith_lambda(a2, cv) + smith_lambda(a2, np.maximum(cl, 1e-7)))
+    e = albedo(cv, np.full(cv.shape, alpha))
+    f = d * g2 / (4 * np.maximum(cv, 1e-7) * e)
+    ok = (cl > 0) & (ls[None, :, 2] > 0) & (cv > 0) & (ch > 0)
+    return np.where(ok, f, 0.0)
+
+
+class Lighting:
+    """Luminance maps of the 8 worlds plus probes. `radiance(model, azimuth)` returns each one's
+    radiance toward the view for a model (MapModel / ClosureModel), the world turned so that its
+    brightest spot lies `azimuth` radians from the view's mirror direction (the mirror direction of
+    v = +x is at azimuth pi). Texels above SUN_THRESHOLD are point lights evaluated exactly."""
+
+    def __init__(self):
+        self.names, self.maps, self.sun_az, self.suns = [], [], [], []
+        for name, img in load_worlds().items():
+            lum = luminance(img).astype(np.float64)
+            h, w = lum.shape
+            self.names.append(name)
+            self.sun_az.append(brightest_azimuth(lum)[0])
+            iy, ix = np.nonzero(lum > SUN_THRESHOLD)
+            el = (0.5 - (iy + 0.5) / h) * np.pi
+            az = (0.5 - (ix + 0.5) / w) * 2 * np.pi
+            dw = np.cos(el) * (np.pi / h) * (2 * np.pi / w)
+            self.suns.append((el, az, (lum[iy, ix] - SUN_THRESHOLD) * dw))
+            self.maps.append(np.minimum(lum, SUN_THRESHOLD))
+
+    def radiance(self, model, azimuth):
+        l, w = model.l, model.w
+        m = w > 0
+        out = {}
+        for name, lum, saz, (el, az, power) in zip(self.names, self.maps, self.sun_az, self.suns):
+            rot = saz - (np.pi + azimuth)       # a direction at azimuth pi + azimuth sees the sun
+            mc = float((w[m] * lookup(lum, l[m], rot)).sum() / len(w))
+            a = az - rot
+            ls = np.stack([np.cos(el) * np.cos(a), np.cos(el) * np.sin(a), np.sin(el)], -1)
+            up = ls[:, 2] > 0
+            out[name] = mc + float((model.eval(ls[up]) * power[up]).sum())
+        z = np.clip(l[:, 2], 0, 1)
+        out["furnace"] = float(w.mean())
+        out["horizon"] = float((w * (z < np.sin(np.radians(10)))).mean())     # band 0-10°
+        out["overhead"] = float((w * (z > np.cos(np.radians(30)))).mean())    # cap within 30° of zenith
+        return out
+
+
+class MapModel:
+    """The normal map: fine normals vMF(mu, kappa), each bent (Cycles) and shaded with GGX alpha."""
+
+    def __init__(self, theta_v, mu, kappa, alpha, m=2048, k=32, seed=0, use_bend=True):
+        rng = np.random.default_rng(seed)
+        self.v = view_dir(theta_v)
+        self.alpha = alpha
+        un, pn = strat2(m, rng)
+        n = sample_vmf(np.asarray(mu, float) / np.linalg.norm(mu), kappa, un, pn)
+        if use_bend:
+            n = bend(np.broadcast_to(self.v, n.shape), n)
+        self.n = n
+        u1, u2 = strat2(k, rng)
+        nv = np.repeat(n, len(u1), 0)
+        s1, s2 = rng.random((len(n), 1)), rng.random((len(n), 1))
+        u1 = ((u1[None, :] + s1) % 1).ravel()
+        u2 = ((u2[None, :] + s2) % 1).ravel()
+        vv = np.broadcast_to(self.v, nv.shape)
+        l, w = reflect_kernel(vv, nv, np.full(len(nv), alpha), u1, u2)
+        cos_nv = np.clip((nv * vv).sum(-1), 0, 1)
+        self.l = l
+        self.w = np.where(cos_nv > 0, w / albedo(cos_nv, np.full(len(nv), alpha)), 0.0)
+        self.neval = n[:: max(1, len(n) // 512)]   # 512 fine normals for the point lights
+
+    def eval(self, ls):
+        return ggx_eval(self.neval, self.v, self.alpha, ls).mean(0)
+
+
+class ClosureModel:
+    """One GGX closure about mu (bent as Cycles bends it) with alpha_c, times `weight`."""
+
+    def __init__(self, theta_v, mu, alpha_c, weight=1.0, n=65536, seed=1, use_bend=True):
+        rng = np.random.default_rng(seed)
+        self.v = view_dir(theta_v)
+        self.alpha = float(np.clip(alpha_c, 1e-4, 1.0))
+        m = np.asarray(mu, float) / np.linalg.norm(mu)
+        if use_bend:
+            m = bend(self.v[None], m[None])[0]
+        self.mu, self.weight = m, weight
+        u1, u2 = strat2(n, rng)
+        nv = np.broadcast_to(m, (len(u1), 3))
+        vv = np.broadcast_to(self.v, nv.shape)
+        l, w = reflect_kernel(vv, nv, np.full(len(u1), self.alpha), u1, u2)
+        cnv = max(float(m @ self.v), 0.0)
+        e = albedo(np.array([cnv]), np.array([self.alpha]))[0]
+        self.l = l
+        self.w = w * weight / e if cnv > 0 else 0 * w
+
+    def eval(self, ls):
+        return self.weight * ggx_eval(self.mu[None], self.v, self.alpha, ls)[0]
