@@ -358,12 +358,15 @@ class Lighting:
 class MapModel:
     """The normal map: fine normals vMF(mu, kappa), each bent (Cycles) and shaded with GGX alpha."""
 
-    def __init__(self, theta_v, mu, kappa, alpha, m=2048, k=32, seed=0, use_bend=True):
+    def __init__(self, theta_v, mu, kappa, alpha, m=2048, k=32, seed=0, use_bend=True, normals=None):
         rng = np.random.default_rng(seed)
         self.v = view_dir(theta_v)
         self.alpha = alpha
-        un, pn = strat2(m, rng)
-        n = sample_vmf(np.asarray(mu, float) / np.linalg.norm(mu), kappa, un, pn)
+        if normals is None:
+            un, pn = strat2(m, rng)
+            n = sample_vmf(np.asarray(mu, float) / np.linalg.norm(mu), kappa, un, pn)
+        else:
+            n = np.asarray(normals, float)
         if use_bend:
             n = bend(np.broadcast_to(self.v, n.shape), n)
         self.n = n
@@ -405,3 +408,83 @@ class ClosureModel:
 
     def eval(self, ls):
         return self.weight * ggx_eval(self.mu[None], self.v, self.alpha, ls)[0]
+
+
+# ---------------------------------------------------------------------------------------------
+# The demo's ground texel: a lattice of cos² bumps (native/src/synth/patterns.cpp bumps_heights:
+# radius 0.4 of the period, 45° steepest slope), seen at a coarse MIP level where one texel holds
+# whole bump periods, its NDF split into lobes as ndfbake does (here: the flat half as one lobe
+# about +Z, the ring of bump normals in azimuth sectors, each a vMF with ndfbake's
+# κ = (3R − R³)/(1 − R²)).
+BUMP_RADIUS = 0.4
+BUMP_MAX_TILT = np.radians(45.0)
+
+
+def bump_normals(k=96):
+    x = (np.arange(k) + 0.5) / k - 0.5
+    dx, dy = np.meshgrid(x, x)
+    d = np.hypot(dx, dy)
+    amp = 2 * BUMP_RADIUS * np.tan(BUMP_MAX_TILT) / np.pi
+    slope = np.where(d < BUMP_RADIUS, -amp * 0.5 * np.pi / BUMP_RADIUS * np.sin(np.pi * d / BUMP_RADIUS), 0.0)
+    gx = slope * dx / np.maximum(d, 1e-12)
+    gy = slope * dy / np.maximum(d, 1e-12)
+    n = np.stack([-gx, -gy, np.ones_like(gx)], -1).reshape(-1, 3)
+    return n / np.linalg.norm(n, axis=-1, keepdims=True)
+
+
+def kappa_of(rbar):
+    rbar = np.clip(rbar, 1e-6, 1 - 1e-9)
+    return (3 * rbar - rbar ** 3) / (1 - rbar * rbar)
+
+
+def bump_lobes(rotation=0.0, sectors=7):
+    """[(weight, mu, kappa)], the bump texel's NDF split into 1 + `sectors` lobes; `rotation`
+    turns the lattice about z (radians)."""
+    n = bump_normals()
+    c, s = np.cos(rotation), np.sin(rotation)
+    n = n @ np.array([[c, s, 0], [-s, c, 0], [0, 0, 1.0]])
+    flat = n[:, 2] > 1 - 1e-9
+    lobes = [(flat.mean(), np.array([0, 0, 1.0]), 1e9)]
+    az = (np.arctan2(n[:, 1], n[:, 0]) - rotation) % (2 * np.pi)
+    sector = np.minimum((az / (2 * np.pi) * sectors).astype(int), sectors - 1)
+    for j in range(sectors):
+        sel = (~flat) & (sector == j)
+        r = n[sel].mean(0)
+        lobes.append((sel.mean(), r / np.linalg.norm(r), float(kappa_of(np.linalg.norm(r)))))
+    return n, lobes
+
+
+def rotate_in_incidence(mu, v, delta):
+    """Turns mu by delta radians about the axis normal to the plane of mu and v (+: toward v);
+    where mu ∥ v it is left as is."""
+    axis = np.cross(mu, v)
+    ln = np.linalg.norm(axis)
+    if ln < 1e-9 or delta == 0:
+        return mu
+    axis /= ln
+    return mu * np.cos(delta) + np.cross(axis, mu) * np.sin(delta)
+
+
+def lobe_closure(theta_v, weight, mu, kappa, alpha, corr=None, n=16384, seed=1):
+    """ClosureModel for one lobe with ndfbake's widening and optionally a correction
+    corr(cos_mu_v, cos_g_v, inv_kappa, alpha) -> (weight factor, alpha_c, tilt toward v)."""
+    v = view_dir(theta_v)
+    inv_kappa = 0.0 if kappa >= 1e8 else 1.0 / kappa
+    alpha_w = np.sqrt(min(alpha * alpha + WIDENING * inv_kappa, 1.0))
+    wf, ac, tilt = 1.0, alpha_w, 0.0
+    if corr is not None:
+        wf, ac, tilt = corr(float(mu @ v), float(v[2]), inv_kappa, alpha)
+    m = rotate_in_incidence(mu, v, tilt)
+    return ClosureModel(theta_v, m, ac, weight=weight * wf, n=n, seed=seed)
+
+
+class Sum:
+    def __init__(self, models):
+        self.models = models
+
+    def radiance(self, lighting, azimuth):
+        tot = {}
+        for m in self.models:
+            for k, val in lighting.radiance(m, azimuth).items():
+                tot[k] = tot.get(k, 0.0) + val
+        return tot
