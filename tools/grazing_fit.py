@@ -79,7 +79,9 @@ def basis(n):
 
 def sample_vndf(vl, alpha, u1, u2):
     """Heitz 2018 visible-normal sampling of isotropic GGX; vl: local view (z = normal)."""
-    alpha = np.asarray(alpha)[..., None]
+    alpha = np.asarray(alpha)
+    if alpha.ndim == vl.ndim - 1:
+        alpha = np.stack([alpha, alpha], -1)   # isotropic
     vh = np.concatenate([alpha * vl[..., :2], vl[..., 2:]], -1)
     vh = vh / np.linalg.norm(vh, axis=-1, keepdims=True)
     l2 = vh[..., 0] ** 2 + vh[..., 1] ** 2
@@ -105,20 +107,31 @@ def strat2(n, rng):
     return ((i.ravel() + rng.random(k * k)) / k, (j.ravel() + rng.random(k * k)) / k)
 
 
-def reflect_kernel(v, n, alpha, u1, u2):
+def lambda_local(alpha, d):
+    """Smith Λ for local directions d[..., 3]; alpha isotropic [...] or (αx, αy) [..., 2]
+    (Heitz 2014, eq. 86 with the projected roughness of eq. 80)."""
+    alpha = np.asarray(alpha)
+    if alpha.ndim == d.ndim:
+        xy2 = np.maximum(d[..., 0] ** 2 + d[..., 1] ** 2, 1e-30)
+        a2 = (alpha[..., 0] ** 2 * d[..., 0] ** 2 + alpha[..., 1] ** 2 * d[..., 1] ** 2) / xy2
+    else:
+        a2 = alpha ** 2
+    return smith_lambda(a2, np.clip(d[..., 2], 1e-7, 1))
+
+
+def reflect_kernel(v, n, alpha, u1, u2, frame=None):
     """GGX sampled about normals n[..., 3] for view v[..., 3] (same shape); returns light dirs l
-    and weights f·(n·l)/pdf = G2/G1(v) (F = 1), 0 where l is below n's or Ng's horizon."""
-    t, b = basis(n)
+    and weights f·(n·l)/pdf = G2/G1(v) (F = 1), 0 where l is below n's or Ng's horizon.
+    alpha: isotropic [...] or (αx, αy) [..., 2] along frame = (t, b)."""
+    t, b = basis(n) if frame is None else frame
     vl = np.stack([(v * t).sum(-1), (v * b).sum(-1), (v * n).sum(-1)], -1)
     h = sample_vndf(vl, alpha, u1, u2)
     hw = h[..., :1] * t + h[..., 1:2] * b + h[..., 2:] * n
     l = 2 * (v * hw).sum(-1, keepdims=True) * hw - v
-    a2 = np.asarray(alpha) ** 2
-    cv = np.clip(vl[..., 2], 1e-7, 1)
-    cl = (l * n).sum(-1)
-    lv = smith_lambda(a2, cv)
-    w = (1 + lv) / (1 + lv + smith_lambda(a2, np.maximum(cl, 1e-7)))
-    w = np.where((cl > 0) & (l[..., 2] > 0), w, 0.0)
+    ll = np.stack([(l * t).sum(-1), (l * b).sum(-1), (l * n).sum(-1)], -1)
+    lv = lambda_local(alpha, vl)
+    w = (1 + lv) / (1 + lv + lambda_local(alpha, np.concatenate([ll[..., :2], np.maximum(ll[..., 2:], 1e-7)], -1)))
+    w = np.where((ll[..., 2] > 0) & (l[..., 2] > 0), w, 0.0)
     return l, w
 
 
@@ -300,20 +313,29 @@ SUN_THRESHOLD = 10.0   # texels brighter than this are drawn as point lights (ex
                        # estimates noisy by 5-50% at 65k samples
 
 
-def ggx_eval(n, v, alpha, ls):
+def ggx_eval(n, v, alpha, ls, frame=None):
     """f·(n·l)·[l·Ng > 0] of Multiscatter GGX (F = 1) about normals n[M,3] for view v[3] at light
-    directions ls[S,3]; returns [M,S]."""
-    a2 = alpha * alpha
-    cv = np.clip(n @ v, 0.0, 1.0)[:, None]
-    cl = n @ ls.T
-    h = ls[None, :, :] + v[None, None, :]
+    directions ls[S,3]; returns [M,S]. alpha scalar, or (αx, αy) with frame = (t[M,3], b[M,3])."""
+    if frame is None:
+        t, b = basis(n)
+        ax = ay = float(alpha)
+    else:
+        t, b = frame
+        ax, ay = alpha
+    vloc = np.stack([t @ v, b @ v, n @ v], -1)                  # [M,3]
+    lloc = np.stack([(ls @ t.T).T, (ls @ b.T).T, (ls @ n.T).T], -1)   # [M,S,3]
+    h = lloc + vloc[:, None, :]
     h = h / np.linalg.norm(h, axis=-1, keepdims=True)
-    ch = (h * n[:, None, :]).sum(-1)
-    d = a2 / (np.pi * (ch * ch * (a2 - 1) + 1) ** 2)
-    g2 = 1.0 / (1 + smith_lambda(a2, cv) + smith_lambda(a2, np.maximum(cl, 1e-7)))
-    e = albedo(cv, np.full(cv.shape, alpha))
+    q = (h[..., 0] / ax) ** 2 + (h[..., 1] / ay) ** 2 + h[..., 2] ** 2
+    d = 1.0 / (np.pi * ax * ay * q * q)
+    al = np.array([ax, ay])
+    g2 = 1.0 / (1 + lambda_local(np.broadcast_to(al, vloc.shape[:-1] + (2,)), vloc)[:, None]
+                + lambda_local(np.broadcast_to(al, lloc.shape[:-1] + (2,)), np.concatenate(
+                    [lloc[..., :2], np.maximum(lloc[..., 2:], 1e-7)], -1)))
+    cv = np.clip(vloc[:, 2], 0.0, 1.0)[:, None]
+    e = albedo(cv, np.full(cv.shape, np.sqrt(ax * ay)))
     f = d * g2 / (4 * np.maximum(cv, 1e-7) * e)
-    ok = (cl > 0) & (ls[None, :, 2] > 0) & (cv > 0) & (ch > 0)
+    ok = (lloc[..., 2] > 0) & (ls[None, :, 2] > 0) & (cv > 0) & (h[..., 2] > 0)
     return np.where(ok, f, 0.0)
 
 
@@ -387,27 +409,36 @@ class MapModel:
 
 
 class ClosureModel:
-    """One GGX closure about mu (bent as Cycles bends it) with alpha_c, times `weight`."""
+    """One GGX closure about mu (bent as Cycles bends it) with alpha_c, times `weight`; with
+    alpha_perp, anisotropic: alpha_c in the plane of incidence, alpha_perp across it."""
 
-    def __init__(self, theta_v, mu, alpha_c, weight=1.0, n=65536, seed=1, use_bend=True):
+    def __init__(self, theta_v, mu, alpha_c, weight=1.0, n=65536, seed=1, use_bend=True, alpha_perp=None):
         rng = np.random.default_rng(seed)
         self.v = view_dir(theta_v)
         self.alpha = float(np.clip(alpha_c, 1e-4, 1.0))
+        self.alpha_perp = self.alpha if alpha_perp is None else float(np.clip(alpha_perp, 1e-4, 1.0))
         m = np.asarray(mu, float) / np.linalg.norm(mu)
         if use_bend:
             m = bend(self.v[None], m[None])[0]
         self.mu, self.weight = m, weight
+        tx = self.v - (self.v @ m) * m
+        if np.linalg.norm(tx) < 1e-9:
+            tx = basis(m[None])[0][0]
+        tx = tx / np.linalg.norm(tx)
+        self.frame = (tx[None], np.cross(m, tx)[None])
         u1, u2 = strat2(n, rng)
         nv = np.broadcast_to(m, (len(u1), 3))
         vv = np.broadcast_to(self.v, nv.shape)
-        l, w = reflect_kernel(vv, nv, np.full(len(u1), self.alpha), u1, u2)
+        fr = (np.broadcast_to(self.frame[0], nv.shape), np.broadcast_to(self.frame[1], nv.shape))
+        al = np.broadcast_to(np.array([self.alpha, self.alpha_perp]), (len(u1), 2))
+        l, w = reflect_kernel(vv, nv, al, u1, u2, frame=fr)
         cnv = max(float(m @ self.v), 0.0)
-        e = albedo(np.array([cnv]), np.array([self.alpha]))[0]
+        e = albedo(np.array([cnv]), np.array([np.sqrt(self.alpha * self.alpha_perp)]))[0]
         self.l = l
         self.w = w * weight / e if cnv > 0 else 0 * w
 
     def eval(self, ls):
-        return self.weight * ggx_eval(self.mu[None], self.v, self.alpha, ls)[0]
+        return self.weight * ggx_eval(self.mu[None], self.v, (self.alpha, self.alpha_perp), ls, frame=self.frame)[0]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -473,9 +504,13 @@ def lobe_closure(theta_v, weight, mu, kappa, alpha, corr=None, n=16384, seed=1):
     alpha_w = np.sqrt(min(alpha * alpha + WIDENING * inv_kappa, 1.0))
     wf, ac, tilt = 1.0, alpha_w, 0.0
     if corr is not None:
-        wf, ac, tilt = corr(float(mu @ v), float(v[2]), inv_kappa, alpha)
+        out = corr(float(mu @ v), float(v[2]), inv_kappa, alpha)
+        wf, ac, tilt = out[:3]
+        perp = out[3] if len(out) > 3 else None
+    else:
+        perp = None
     m = rotate_in_incidence(mu, v, tilt)
-    return ClosureModel(theta_v, m, ac, weight=weight * wf, n=n, seed=seed)
+    return ClosureModel(theta_v, m, ac, weight=weight * wf, n=n, seed=seed, alpha_perp=perp)
 
 
 class Sum:
