@@ -523,3 +523,138 @@ class Sum:
             for k, val in lighting.radiance(m, azimuth).items():
                 tot[k] = tot.get(k, 0.0) + val
         return tot
+
+
+def ring_lobes(tilt_deg, kappa, nring=8, offset=0.25, flat=0.5):
+    """A texel of `flat` weight of flat normals plus a ring of nring vMF(κ) lobes tilted tilt_deg."""
+    lobes = [(flat, np.array([0, 0, 1.0]), 1e9)]
+    t = np.radians(tilt_deg)
+    for j in range(nring):
+        ph = 2 * np.pi * (j + offset) / nring
+        lobes.append(((1 - flat) / nring, np.array([np.sin(t) * np.cos(ph), np.sin(t) * np.sin(ph), np.cos(t)]),
+                      kappa))
+    return lobes
+
+
+# ---------------------------------------------------------------------------------------------
+# The correction
+GRAZING_MIN_COSINE = 1e-3     # cos θμ floor (θμ ≈ 89.94°): tan²θμ ≤ 1e6, finite; lobes facing away
+                              # from the view (μ·v ≤ 0) get the full narrowing (α_c → α)
+MAX_WIDENED_ALPHA2 = 1.0      # α'² ≤ 1 as the lobe group already clamps
+
+
+def corrected_alpha2(cos_mu_v, inv_kappa, alpha, c, q=1.0):
+    """Isotropic narrowing: α_c² = max(α'² / (1 + c·α'²·tan²θμ)^q, α²), α'² = min(α² + 1.5/κ, 1).
+    Vectorized; finite and positive for every input (cos clamped, 1/κ ≥ 0, α ≥ 1e-4)."""
+    a2 = np.maximum(np.asarray(alpha, float), 1e-4) ** 2
+    aw2 = np.minimum(a2 + WIDENING * np.maximum(inv_kappa, 0.0), MAX_WIDENED_ALPHA2)
+    cm = np.clip(cos_mu_v, GRAZING_MIN_COSINE, 1.0)
+    tan2 = (1.0 - cm * cm) / (cm * cm)
+    return np.maximum(aw2 / (1.0 + c * aw2 * tan2) ** q, a2)
+
+
+def make_correction(kind, c=1.0, q=1.0, ratio_max=10.0):
+    """corr(cos_mu_v, cos_g_v, inv_kappa, alpha) -> (weight factor, α in the plane of incidence,
+    tilt, [α across]) for lobe_closure; kind 'none', 'iso' (EEVEE's rule when c = q = 1) or
+    'aniso' (the narrowing in the plane of incidence only; α across kept at α', aspect ≤ ratio_max
+    as Blender's Anisotropic input allows)."""
+    if kind == "none":
+        return None
+
+    def corr(cos_mu_v, cos_g_v, inv_kappa, alpha):
+        ac = float(np.sqrt(corrected_alpha2(cos_mu_v, inv_kappa, alpha, c, q)))
+        if kind == "iso":
+            return 1.0, ac, 0.0
+        ap = float(np.sqrt(min(alpha * alpha + WIDENING * inv_kappa, MAX_WIDENED_ALPHA2)))
+        return 1.0, max(ac, ap / ratio_max), 0.0, ap
+    return corr
+
+
+# ---------------------------------------------------------------------------------------------
+# Evaluation sets
+FAR_THETAS = (80.0, 82.0, 84.0, 86.0, 87.0)     # the demo's far ground: 80-87° from the normal
+FAR_AZIMUTHS = (-10.0, 4.0, 15.0)               # sun relative to the mirror azimuth across its pixels
+BASE_ALPHA = 0.04                               # roughness 0.2
+
+
+def far_texels():
+    out = [("bumps rot 0", bump_lobes(0.0)), ("bumps rot 26", bump_lobes(np.pi / 7))]
+    for tilt, kappa in ((15, 5), (15, 50), (30, 20), (30, 100), (45, 10), (45, 200)):
+        out.append(("ring %d° κ%d" % (tilt, kappa), (None, ring_lobes(tilt, kappa))))
+    return out
+
+
+def texel_map(theta_v, normals, lobes, alpha, lighting, azimuths):
+    """The map's radiance per azimuth: explicit fine normals, or fine normals drawn from the lobes."""
+    per = [dict() for _ in azimuths]
+    if normals is not None:
+        parts = [(1.0, MapModel(theta_v, None, None, alpha, k=16, normals=normals))]
+    else:
+        parts = []
+        for w, mu, kappa in lobes:
+            if kappa >= 1e8:
+                parts.append((w, ClosureModel(theta_v, mu, alpha, n=4096)))   # flat: exact
+            else:
+                parts.append((w, MapModel(theta_v, mu, kappa, alpha, m=400, k=9)))
+    for w, model in parts:
+        for i, az in enumerate(azimuths):
+            for key, val in lighting.radiance(model, np.radians(az)).items():
+                per[i][key] = per[i].get(key, 0.0) + w * val
+    return per
+
+
+def texel_closures(theta_v, lobes, alpha, corr, lighting, azimuths):
+    per = [dict() for _ in azimuths]
+    for w, mu, kappa in lobes:
+        model = lobe_closure(theta_v, w, mu, kappa, alpha, corr, n=4096)
+        for i, az in enumerate(azimuths):
+            for key, val in lighting.radiance(model, np.radians(az)).items():
+                per[i][key] = per[i].get(key, 0.0) + val
+    return per
+
+
+class FarGround:
+    """The map's radiance for far_texels() × FAR_THETAS × FAR_AZIMUTHS, computed once; `ratios`
+    gives closure/map for a correction."""
+
+    def __init__(self, lighting, alpha=BASE_ALPHA, log=print):
+        self.lighting, self.alpha = lighting, alpha
+        self.texels = far_texels()
+        self.ref = {}
+        t0 = time.time()
+        for name, (normals, lobes) in self.texels:
+            for th in FAR_THETAS:
+                self.ref[name, th] = texel_map(np.radians(th), normals, lobes, alpha, lighting, FAR_AZIMUTHS)
+        log("far-ground references: %.0f s" % (time.time() - t0))
+
+    def evaluate(self, corr):
+        """{(texel, θ): [per azimuth {light: (closure, map)}]}"""
+        out = {}
+        for name, (_, lobes) in self.texels:
+            for th in FAR_THETAS:
+                cl = texel_closures(np.radians(th), lobes, self.alpha, corr, self.lighting, FAR_AZIMUTHS)
+                out[name, th] = [{k: (c[k], r[k]) for k in r} for c, r in zip(cl, self.ref[name, th])]
+        return out
+
+
+def aggregate(result, keys, select=lambda name, th: True):
+    """Σ closure / Σ map over the selected (texel, θ) and all azimuths, per light."""
+    out = {}
+    for k in keys:
+        num = sum(d[k][0] for (name, th), per in result.items() if select(name, th) for d in per)
+        den = sum(d[k][1] for (name, th), per in result.items() if select(name, th) for d in per)
+        out[k] = num / den
+    return out
+
+
+def objective(result, worlds):
+    """Mean over (texel, θ) of the mean over worlds of log²(closure/map), azimuths summed, plus the
+    far ground's aggregate log² per world."""
+    per = []
+    for key, lst in result.items():
+        for wname in worlds:
+            num = sum(d[wname][0] for d in lst)
+            den = sum(d[wname][1] for d in lst)
+            per.append(np.log(num / den) ** 2)
+    agg = aggregate(result, worlds)
+    return float(np.mean(per) + np.mean([np.log(agg[w]) ** 2 for w in worlds]))
