@@ -658,3 +658,178 @@ def objective(result, worlds):
             per.append(np.log(num / den) ** 2)
     agg = aggregate(result, worlds)
     return float(np.mean(per) + np.mean([np.log(agg[w]) ** 2 for w in worlds]))
+
+
+# ---------------------------------------------------------------------------------------------
+# Checks, fit, validation, report
+def furnace_check(corr, thetas=(0, 30, 60, 75, 80, 85, 88), alphas=(0.02, 0.04, 0.2, 0.5)):
+    """Flat map (κ → ∞, 1/κ = 0) under a uniform white sky: corrected closure / plain material
+    (one GGX about +z with α) and / the map, per view angle (2° above the horizon at 88°)."""
+    rows = []
+    for a in alphas:
+        for th in thetas:
+            plain = ClosureModel(np.radians(th), [0, 0, 1.0], a, n=16384).w.mean()
+            mp = MapModel(np.radians(th), [0, 0, 1.0], 1e9, a, m=64, k=256).w.mean()
+            if corr is None:
+                cl = plain
+            else:
+                cl = lobe_closure(np.radians(th), 1.0, np.array([0, 0, 1.0]), 1e9, a, corr, n=16384).w.mean()
+            rows.append((a, th, cl / plain, cl / mp))
+    return rows
+
+
+def finite_check(c, q, ratio_max):
+    """Every output of the correction over cos θμ in [-1, 1], 1/κ in [0, 1e6] (the lobe group's
+    range: 1/κ ≤ 1/1e-6), α in [0, 1]: finite, positive."""
+    cos = np.concatenate([np.linspace(-1, 1, 401), [0.0, -0.0, 1e-9, -1e-9, 1e-3, 1 - 1e-9]])
+    ik = np.concatenate([[0.0], np.logspace(-9, 6, 61)])
+    al = np.concatenate([[0.0, 1e-6], np.linspace(0.001, 1, 40)])
+    C, K, A = np.meshgrid(cos, ik, al, indexing="ij")
+    with np.errstate(all="raise"):
+        ac2 = corrected_alpha2(C, K, A, c, q)
+        aw = np.sqrt(np.minimum(np.maximum(A, 1e-4) ** 2 + WIDENING * K, 1.0))
+        ain = np.maximum(np.sqrt(ac2), aw / ratio_max)
+        rough_iso = np.sqrt(np.sqrt(ac2))
+        rough_aniso = np.sqrt(np.sqrt(aw * ain))
+        aniso = np.clip((1 - ain / aw) / 0.9, 0, 1)
+    out = dict(alpha_c2=ac2, rough_iso=rough_iso, rough_aniso=rough_aniso, anisotropic=aniso)
+    bad = {k: int((~np.isfinite(v) | (v < 0)).sum()) for k, v in out.items()}
+    ranges = {k: (float(v.min()), float(v.max())) for k, v in out.items()}
+    return bad, ranges
+
+
+LOBE_THETAS = (0.0, 60.0, 80.0, 85.0, 88.0)
+LOBE_KAPPAS = (2.0, 10.0, 50.0, 1e4)
+LOBE_ALPHAS = (0.02, 0.04, 0.2, 0.5)
+LOBE_TILTS = (("flat", 0.0, 0.0), ("45° toward", 45.0, 0.0), ("45° away", 45.0, 180.0))
+
+
+def lobe_table(lighting, corrs, azimuth=4.0, log=print):
+    """Single vMF lobes: closure/map per light for each correction."""
+    rows = []
+    t0 = time.time()
+    for th in LOBE_THETAS:
+        v = view_dir(np.radians(th))
+        for kappa in LOBE_KAPPAS:
+            for a in LOBE_ALPHAS:
+                for tname, tilt, taz in LOBE_TILTS:
+                    t, p = np.radians(tilt), np.radians(taz)
+                    mu = np.array([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)])
+                    ref = lighting.radiance(MapModel(np.radians(th), mu, kappa, a, m=400, k=9), np.radians(azimuth))
+                    row = dict(theta=th, kappa=kappa, alpha=a, tilt=tname, theta_mu=float(np.degrees(np.arccos(mu @ v))))
+                    for cname, corr in corrs.items():
+                        cl = lighting.radiance(lobe_closure(np.radians(th), 1.0, mu, kappa, a, corr, n=4096),
+                                               np.radians(azimuth))
+                        row[cname] = {k: cl[k] / ref[k] if ref[k] > 0 else float("nan") for k in ref}
+                    rows.append(row)
+    log("single-lobe table: %.0f s" % (time.time() - t0))
+    return rows
+
+
+def fmt(x):
+    return "%.2f" % x
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--quick", action="store_true", help="skip the single-lobe table")
+    args = ap.parse_args(argv)
+    os.makedirs(args.out, exist_ok=True)
+    report = []
+
+    def log(*a):
+        s = " ".join(str(x) for x in a)
+        print(s, flush=True)
+        report.append(s)
+
+    t0 = time.time()
+    lighting = Lighting()
+    worlds = lighting.names
+    keys = worlds + ["furnace", "horizon", "overhead"]
+    far = FarGround(lighting, log=log)
+
+    # Fit: one constant per family on the far-ground objective.
+    fits = {}
+    for kind, grid in (("iso", (1.0, 2.0, 3.0, 4.0, 6.0, 8.0)), ("aniso", (0.25, 0.5, 1.0, 2.0))):
+        scores = []
+        for c in grid:
+            res = far.evaluate(make_correction(kind, c))
+            scores.append((objective(res, worlds), c))
+            log("fit %s c=%g objective %.4f" % (kind, c, scores[-1][0]))
+        fits[kind] = min(scores)[1]
+    log("fitted: iso c=%g, aniso c=%g" % (fits["iso"], fits["aniso"]))
+
+    corrs = {"none": None, "eevee_rule": make_correction("iso", 1.0),
+             "iso": make_correction("iso", fits["iso"]), "aniso": make_correction("aniso", fits["aniso"])}
+    results = {name: far.evaluate(corr) for name, corr in corrs.items()}
+
+    # Far-ground table per world.
+    lines = ["| light | " + " | ".join(corrs) + " |", "|---|" + "---:|" * len(corrs)]
+    aggs = {name: aggregate(res, keys) for name, res in results.items()}
+    for k in keys:
+        lines.append("| %s | " % k + " | ".join(fmt(aggs[n][k]) for n in corrs) + " |")
+    within = {n: sum(abs(np.log(aggs[n][w])) < np.log(1.1) for w in worlds) for n in corrs}
+    lines.append("| worlds within 10%% | " + " | ".join("%d/8" % within[n] for n in corrs) + " |")
+    log("\n## Far ground (all texels, θv %s, sun azimuths %s): closure / map\n" % (FAR_THETAS, FAR_AZIMUTHS))
+    log("\n".join(lines))
+
+    # Per θv.
+    for n in corrs:
+        log("\n### %s: far ground per view angle (closure / map)\n" % n)
+        log("| θv | " + " | ".join(k for k in keys) + " |")
+        log("|---:|" + "---:|" * len(keys))
+        for th in FAR_THETAS:
+            a = aggregate(results[n], keys, lambda name, t, th=th: t == th)
+            log("| %g | " % th + " | ".join(fmt(a[k]) for k in keys) + " |")
+    # Per texel.
+    for n in ("none", "iso", "aniso"):
+        log("\n### %s: per texel (all θv, azimuths)\n" % n)
+        log("| texel | " + " | ".join(keys) + " |")
+        log("|---|" + "---:|" * len(keys))
+        for name, _ in far.texels:
+            a = aggregate(results[n], keys, lambda nm, t, name=name: nm == name)
+            log("| %s | " % name + " | ".join(fmt(a[k]) for k in keys) + " |")
+
+    # Furnace.
+    log("\n## White furnace, flat map (κ → ∞): corrected / plain material, corrected / map\n")
+    log("| α | θv | " + " | ".join("%s / plain | %s / map" % (n, n) for n in ("iso", "aniso")) + " |")
+    log("|---:|---:|" + "---:|" * 4)
+    f_iso = furnace_check(corrs["iso"])
+    f_an = furnace_check(corrs["aniso"])
+    worst = 0.0
+    for (a, th, p1, m1), (_, _, p2, m2) in zip(f_iso, f_an):
+        log("| %g | %g | %.4f | %.4f | %.4f | %.4f |" % (a, th, p1, m1, p2, m2))
+        worst = max(worst, abs(p1 - 1), abs(p2 - 1))
+    log("\nworst |corrected/plain − 1| = %.2e" % worst)
+
+    bad, ranges = finite_check(fits["iso"], 1.0, 10.0)
+    log("\n## Finite check (cos θμ ∈ [−1, 1], 1/κ ∈ [0, 1e6], α ∈ [0, 1])\n")
+    for k in bad:
+        log("- %s: %d non-finite or negative; range [%.3g, %.3g]" % (k, bad[k], *ranges[k]))
+
+    if not args.quick:
+        rows = lobe_table(lighting, {"none": None, "iso": corrs["iso"], "aniso": corrs["aniso"]}, log=log)
+        with open(os.path.join(args.out, "lobes.json"), "w") as f:
+            json.dump(rows, f, indent=1)
+        log("\n## Single vMF lobes (sun 4° from the mirror azimuth): median over worlds of closure/map,"
+            " [min, max], and the furnace ratio\n")
+        log("| θv | κ | α | lobe | θμ | none | iso | aniso | furnace none / iso / aniso |")
+        log("|---:|---:|---:|---|---:|---|---|---|---|")
+        for r in rows:
+            cells = []
+            for n in ("none", "iso", "aniso"):
+                vals = np.array([r[n][w] for w in worlds])
+                cells.append("%.2f [%.2f, %.2f]" % (np.median(vals), vals.min(), vals.max()))
+            fur = " / ".join("%.2f" % r[n]["furnace"] for n in ("none", "iso", "aniso"))
+            log("| %g | %g | %g | %s | %.0f | %s | %s |" % (r["theta"], r["kappa"], r["alpha"], r["tilt"],
+                                                        r["theta_mu"], " | ".join(cells), fur))
+    log("\ntotal %.0f s" % (time.time() - t0))
+    with open(os.path.join(args.out, "report.md"), "w") as f:
+        f.write("\n".join(report) + "\n")
+    with open(os.path.join(args.out, "fit.json"), "w") as f:
+        json.dump(dict(fits=fits, far_ground=aggs, within_10pct={k: int(v) for k, v in within.items()}), f, indent=1)
+
+
+if __name__ == "__main__":
+    main()
