@@ -726,6 +726,22 @@ def lobe_table(lighting, corrs, azimuth=4.0, log=print):
     return rows
 
 
+def lobe_summary(rows, worlds, names=("none", "iso", "aniso")):
+    """Per view angle: median and 90th percentile over (κ, α, lobe, world) of |log(closure/map)|
+    as a factor, and the share within 10%; κ ≥ 10 only (κ = 2 is a near-uniform lobe that no GGX
+    closure matches at any angle)."""
+    lines = ["| θv | " + " | ".join("%s median / p90 factor, within 10%%" % n for n in names) + " |",
+             "|---:|" + "---|" * len(names)]
+    for th in LOBE_THETAS:
+        cells = []
+        for n in names:
+            e = np.abs(np.log([r[n][w] for r in rows if r["theta"] == th and r["kappa"] >= 10 for w in worlds]))
+            cells.append("%.2f / %.2f, %.0f%%" % (np.exp(np.median(e)), np.exp(np.percentile(e, 90)),
+                                                  100 * (e < np.log(1.1)).mean()))
+        lines.append("| %g | " % th + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def fmt(x):
     return "%.2f" % x
 
@@ -812,6 +828,8 @@ def main(argv=None):
         rows = lobe_table(lighting, {"none": None, "iso": corrs["iso"], "aniso": corrs["aniso"]}, log=log)
         with open(os.path.join(args.out, "lobes.json"), "w") as f:
             json.dump(rows, f, indent=1)
+        log("\n## Single vMF lobes, summary (κ ≥ 10)\n")
+        log(lobe_summary(rows, worlds))
         log("\n## Single vMF lobes (sun 4° from the mirror azimuth): median over worlds of closure/map,"
             " [min, max], and the furnace ratio\n")
         log("| θv | κ | α | lobe | θμ | none | iso | aniso | furnace none / iso / aniso |")
