@@ -38,7 +38,17 @@ Both are linear in the lighting, so each is sampled once as a weighted set of li
 8 studio worlds (rotated so that the brightest spot lies at a chosen azimuth relative to the
 mirror direction) and probe lights.
 
-The correction (docs/grazing-fit.md): see correction() below.
+The correction (docs/grazing-fit.md; corrected_alpha2, make_correction): narrow each lobe as the
+view grazes it, α_c² = max(α'² / (1 + C·α'²·tan²θμ), α²), θμ between the view and the lobe's
+normal, cos θμ floored at 1e-3; C = 1 is the EEVEE rule nodes.grazing_roughness_group draws today,
+the fit gives C = 4 for Cycles. Weight and normal unchanged. Also fitted: the same narrowing in the
+plane of incidence only (anisotropic; Cycles only).
+
+Fit: one constant per family minimizing, over far-ground texels (the demo's bump lattice split
+into lobes, and rings of vMF lobes) × view angles 80-87°, the mean over the 8 worlds of
+log²(closure/map), plus the far-ground aggregate's log² per world (objective()). Validation: the
+far ground per world and view angle, the white furnace (flat map) at 0-88°, a finiteness sweep of
+the formula, and single vMF lobes over θv 0-88°, κ 2-1e4, α 0.02-0.5, tilts up to 45°.
 
 Run: python3 tools/grazing_fit.py --out DIR   (a few minutes on 2 cores)
 """
