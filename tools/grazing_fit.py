@@ -53,11 +53,9 @@ the formula, and single vMF lobes over θv 0-88°, κ 2-1e4, α 0.02-0.5, tilts 
 Run: python3 tools/grazing_fit.py --out DIR   (a few minutes on 2 cores)
 """
 import argparse
-import glob
 import json
 import os
 import subprocess
-import sys
 import time
 
 import numpy as np
