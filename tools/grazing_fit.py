@@ -724,7 +724,8 @@ def lobe_table(lighting, corrs, azimuth=4.0, log=print):
                     t, p = np.radians(tilt), np.radians(taz)
                     mu = np.array([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)])
                     ref = lighting.radiance(MapModel(np.radians(th), mu, kappa, a, m=400, k=9), np.radians(azimuth))
-                    row = dict(theta=th, kappa=kappa, alpha=a, tilt=tname, theta_mu=float(np.degrees(np.arccos(mu @ v))))
+                    row = dict(theta=th, kappa=kappa, alpha=a, tilt=tname,
+                               theta_mu=float(np.degrees(np.arccos(mu @ v))))
                     for cname, corr in corrs.items():
                         cl = lighting.radiance(lobe_closure(np.radians(th), 1.0, mu, kappa, a, corr, n=4096),
                                                np.radians(azimuth))
