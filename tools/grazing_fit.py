@@ -759,6 +759,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", required=True)
     ap.add_argument("--quick", action="store_true", help="skip the single-lobe table")
+    ap.add_argument("--alpha", type=float, default=BASE_ALPHA,
+                    help="the material's GGX α for the far ground (default 0.04: roughness 0.2)")
     args = ap.parse_args(argv)
     os.makedirs(args.out, exist_ok=True)
     report = []
@@ -772,7 +774,8 @@ def main(argv=None):
     lighting = Lighting()
     worlds = lighting.names
     keys = worlds + ["furnace", "horizon", "overhead"]
-    far = FarGround(lighting, log=log)
+    far = FarGround(lighting, alpha=args.alpha, log=log)
+    log("far ground at α = %g (roughness %.3g)" % (args.alpha, np.sqrt(args.alpha)))
 
     # Fit: one constant per family on the far-ground objective.
     fits = {}
