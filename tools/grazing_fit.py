@@ -798,7 +798,7 @@ def main(argv=None):
     for k in keys:
         lines.append("| %s | " % k + " | ".join(fmt(aggs[n][k]) for n in corrs) + " |")
     within = {n: sum(abs(np.log(aggs[n][w])) < np.log(1.1) for w in worlds) for n in corrs}
-    lines.append("| worlds within 10%% | " + " | ".join("%d/8" % within[n] for n in corrs) + " |")
+    lines.append("| worlds within 10% | " + " | ".join("%d/8" % within[n] for n in corrs) + " |")
     log("\n## Far ground (all texels, θv %s, sun azimuths %s): closure / map\n" % (FAR_THETAS, FAR_AZIMUTHS))
     log("\n".join(lines))
 
