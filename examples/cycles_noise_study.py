@@ -99,14 +99,14 @@ def split_sun(scene):
 def use_variant(scene, variant, max_lobes):
     """Re-bakes the scene's materials with up to `max_lobes` lobes so that Cycles draws them as
     `variant` says."""
-    from ndfbake import nodes
+    from ndfbake import node_builders, nodes
     lobes = nodes.NARROWED if variant.startswith("narrowed") else nodes.WIDENED
     for outcome in demo_scene.bake_all(scene, max_lobes=max_lobes, cycles_lobes=lobes):
         if "error" in outcome:
             raise RuntimeError("bake of %s failed: %s" % (outcome["material"], outcome["message"]))
     if variant.endswith("-ggx"):
         for group in bpy.data.node_groups:
-            if group.get(nodes.TAG) is None:  # not the add-on's (nodes._new_group tags its groups)
+            if group.get(node_builders.TAG) is None:  # not the add-on's (node_builders._new_group tags its groups)
                 continue
             for node in group.nodes:
                 if node.bl_idname == "ShaderNodeBsdfPrincipled" and node.distribution == "MULTI_GGX":

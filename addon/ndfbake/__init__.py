@@ -28,13 +28,14 @@ bl_info = {
 if "bpy" in locals():
     import importlib
     for _module in (blender_compat, native, image_pixels, node_animation, material_scan, scene_lod,  # noqa: F821
-                    node_builders, specular_split, nodes, lobe_folders, bake, operators, ui):  # noqa: F821
+                    node_builders, specular_split, lobe_nodes, lod_nodes, nodes, group_node, lobe_folders,  # noqa: F821
+                    bake, operators, ui):  # noqa: F821
         importlib.reload(_module)
 
 import bpy  # noqa: E402
 
-from . import (bake, blender_compat, image_pixels, lobe_folders, material_scan, native,  # noqa: E402,F401
-               node_animation, node_builders, nodes, operators, scene_lod, specular_split, ui)
+from . import (bake, blender_compat, group_node, image_pixels, lobe_folders, lobe_nodes, lod_nodes,  # noqa: E402,F401
+               material_scan, native, node_animation, node_builders, nodes, operators, scene_lod, specular_split, ui)
 
 
 def register():

@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 
 import bpy
 
-from . import id_names, image_pixels, lobe_folders, material_scan, native, nodes, scene_lod
+from . import group_node, id_names, image_pixels, lobe_folders, lod_nodes, material_scan, native, node_builders, nodes, scene_lod
 
 RECORD_KEY = material_scan.RECORD_KEY
 RECORD_VERSION = 1
@@ -357,7 +357,7 @@ def _load_lobe_images(material_name, paths, pack, created):
     for j, path in enumerate(paths):
         image = bpy.data.images.load(path)
         image.name = id_names.free(bpy.data.images, *nodes.lobe_image_name(material_name, j))
-        image[nodes.TAG] = nodes.GROUP_VERSION
+        image[node_builders.TAG] = node_builders.GROUP_VERSION
         created.append(image.name)
         image.filepath = _relative(path)
         image.colorspace_settings.name = "Non-Color"
@@ -419,7 +419,7 @@ def finish(job):
     """After a successful run(): moves a pending job's files into place, loads the lobe textures,
     builds the node group, bypasses the Principled BSDF(s) and stores the bake record. Replaces a
     previous bake's nodes, images and record only once the new ones are all built and wired
-    (nodes.replace_group_node): on an error the material is as it was before this bake, its
+    (group_node.replace_group_node): on an error the material is as it was before this bake, its
     previous bake included. (One exception: where the user deleted a previous bake's group node,
     its Principled BSDF is first wired back to where it was before that bake, as Revert does.)"""
     if job.error is not None:
@@ -442,7 +442,7 @@ def finish(job):
         layout = report.get("atlas") or {}
         if not layout.get("levels"):
             raise BakeError("NATIVE_ERROR", "report.json in %s has no atlas layout" % job.out_dir)
-        atlas = nodes.AtlasLayout(width=layout["width"], height=layout["height"], levels=layout["levels"])
+        atlas = lod_nodes.AtlasLayout(width=layout["width"], height=layout["height"], levels=layout["levels"])
 
     old = material_scan.record(material) or {}
     # The group nodes of the previous bake, by the Principled BSDF they stand for: replaced in place.
@@ -478,25 +478,25 @@ def finish(job):
             texture = tree.nodes[texture_name]
             targets.append({"principled": principled_name, "normal_map": normal_map_name, "group_node": "",
                             "node_group": group.name, "bypassed": [], "eevee_output": "",
-                            "principled_settings": nodes.principled_settings(principled)})
+                            "principled_settings": group_node.principled_settings(principled)})
             if principled_name in replacing:
                 previous = replacing[principled_name]
-                replacement = nodes.replace_group_node(tree, group, principled, normal_map, texture,
+                replacement = group_node.replace_group_node(tree, group, principled, normal_map, texture,
                                                        previous.group_node, previous.eevee_output)
                 replacements.append((targets[-1], replacement))
                 node = tree.nodes[replacement.node]
                 targets[-1].update(bypassed=replacement.bypassed, eevee_output=replacement.eevee_output)
             else:
-                node, bypassed, eevee_output = nodes.insert_group_node(tree, group, principled, normal_map, texture)
+                node, bypassed, eevee_output = group_node.insert_group_node(tree, group, principled, normal_map, texture)
                 inserted.append(targets[-1])
                 targets[-1].update(group_node=node.name, bypassed=bypassed, eevee_output=eevee_output)
             if job.lod is not None and bpy.context.scene.camera is not None:
-                nodes.drive_lod_inputs(node, bpy.context.scene, bpy.context.scene.camera)
+                lod_nodes.drive_lod_inputs(node, bpy.context.scene, bpy.context.scene.camera)
     except Exception as e:
         # A bug, not bad input: take away what this bake added (its nodes, node groups, images and
         # files), so that the material is as it was before it, a previous bake included; say so.
         for _, replacement in reversed(replacements):
-            nodes.undo_replacement(tree, replacement)
+            group_node.undo_replacement(tree, replacement)
         _remove_nodes(material, {"targets": inserted}, keep_edits=False)
         nodes.remove_unused_groups([name for name in bpy.data.node_groups.keys() if name not in groups_before])
         _remove_images(created)
@@ -507,7 +507,7 @@ def finish(job):
     # Everything is built: the previous bake's nodes, node groups and images go (its files stay for
     # Ctrl-Z: lobe_folders.py), and the new ones take their names.
     for target, replacement in replacements:
-        target["group_node"] = nodes.commit_replacement(tree, replacement).name
+        target["group_node"] = group_node.commit_replacement(tree, replacement).name
     baked = {principled_name for principled_name, _, _ in job.targets}  # each replaced above
     _remove_nodes(material, {"targets": [found.target for name, found in replacing.items() if name not in baked]})
     nodes.remove_unused_groups(old_groups)
@@ -553,9 +553,9 @@ def _take_names(material, targets, images):
         if group is None:
             continue
         group.name = id_names.free(bpy.data.node_groups, nodes.material_group_name(material.name), own=group)
-        table = nodes.atlas_table(group)  # named after it
+        table = lod_nodes.atlas_table(group)  # named after it
         if table is not None:
-            table.name = id_names.free(bpy.data.node_groups, *nodes.atlas_table_name(group.name), own=table)
+            table.name = id_names.free(bpy.data.node_groups, *lod_nodes.atlas_table_name(group.name), own=table)
         target["node_group"] = group.name
 
 
@@ -600,12 +600,12 @@ def bake_materials(materials, settings_for=None, progress=None):
 
 def _remove_nodes(material, rec, keep_edits=True):
     """Removes a bake's nodes; with keep_edits, what the user changed on its group nodes goes back
-    to the Principled BSDFs (nodes.write_back_inputs)."""
+    to the Principled BSDFs (group_node.write_back_inputs)."""
     tree = material.node_tree
     used = []
     for target in rec.get("targets", []):
         bypassed = [tuple(b) for b in target.get("bypassed", [])]
-        group = nodes.remove_group_node(tree, target["group_node"], target["principled"], bypassed,
+        group = group_node.remove_group_node(tree, target["group_node"], target["principled"], bypassed,
                                         target.get("eevee_output", ""), keep_edits, target.get("normal_map", ""),
                                         target.get("principled_settings"))
         if group is not None:
@@ -617,7 +617,7 @@ def _remove_nodes(material, rec, keep_edits=True):
 def _remove_images(names):
     for name in names:
         image = bpy.data.images.get(name)
-        if image is not None and image.get(nodes.TAG) is not None and image.users == 0:
+        if image is not None and image.get(node_builders.TAG) is not None and image.users == 0:
             bpy.data.images.remove(image)
 
 

@@ -86,3 +86,9 @@ def _mix(tree, data_type, factor, a, b, location):
     _link(tree, a, node.inputs[first])
     _link(tree, b, node.inputs[first + 1])
     return node.outputs[{"FLOAT": 0, "VECTOR": 1}[data_type]]
+
+
+def socket_value(socket):
+    """A socket's default value, as a tuple where it has several components (comparable, storable)."""
+    value = socket.default_value
+    return tuple(value) if hasattr(value, "__len__") else value

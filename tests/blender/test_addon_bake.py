@@ -84,7 +84,7 @@ def test_blender_decodes_the_map_as_the_command_line_does():
 
 
 def test_bake_adds_only_the_group_and_bypass():
-    from ndfbake import bake, material_scan, nodes
+    from ndfbake import bake, group_node, material_scan, nodes
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         before, data_before, files_before = h.dump_material(material), h.data_counts(), h.listing(directory)
@@ -95,7 +95,7 @@ def test_bake_adds_only_the_group_and_bypass():
         after = h.dump_material(material)
 
         added = set(after["nodes"]) - set(before["nodes"])
-        h.expect(added == {"ndfbake", nodes.EEVEE_OUTPUT}, "added nodes: %s" % added)
+        h.expect(added == {"ndfbake", group_node.EEVEE_OUTPUT}, "added nodes: %s" % added)
         h.expect(set(before["nodes"]) <= set(after["nodes"]), "a node went away")
         # The nodes the record names carry their role in it (found again when renamed), and
         # nothing else of any node changes; the Principled's output is bypassed (links, below).
@@ -109,14 +109,14 @@ def test_bake_adds_only_the_group_and_bypass():
         added_links = set(after["links"]) - set(before["links"])
         h.expect(removed_links == {("Principled BSDF", "BSDF", "Material Output", "Surface", False, True)},
                  "removed links: %s" % removed_links)
-        h.expect(all("ndfbake" in (l[0], l[2]) or l[2] == nodes.EEVEE_OUTPUT for l in added_links),
+        h.expect(all("ndfbake" in (l[0], l[2]) or l[2] == group_node.EEVEE_OUTPUT for l in added_links),
                  "added links not at the group or its EEVEE output: %s" % added_links)
-        group_node = material.node_tree.nodes["ndfbake"]
-        h.expect([l.to_node.name for l in group_node.outputs["BSDF"].links] == ["Material Output"],
+        baked_node = material.node_tree.nodes["ndfbake"]
+        h.expect([l.to_node.name for l in baked_node.outputs["BSDF"].links] == ["Material Output"],
                  "group not at the output")
-        h.expect([l.to_node.name for l in group_node.outputs[nodes.EEVEE_BSDF].links] == [nodes.EEVEE_OUTPUT],
+        h.expect([l.to_node.name for l in baked_node.outputs[nodes.EEVEE_BSDF].links] == [group_node.EEVEE_OUTPUT],
                  "the group's EEVEE BSDF does not reach the EEVEE output")
-        eevee_output = material.node_tree.nodes[nodes.EEVEE_OUTPUT]
+        eevee_output = material.node_tree.nodes[group_node.EEVEE_OUTPUT]
         h.expect(eevee_output.target == "EEVEE" and material.node_tree.nodes["Material Output"].target == "ALL",
                  "output targets: %s, %s" % (eevee_output.target, material.node_tree.nodes["Material Output"].target))
         h.expect(material.node_tree.get_output_node("EEVEE") == eevee_output
@@ -223,26 +223,26 @@ def test_cycles_lobes_narrowed_draws_the_eevee_lobes_everywhere():
     """Cycles Lobes: Narrowed gives Cycles' lobes (the user's output) a grazing narrowing of their
     own (nodes.GRAZING_NARROWING["BSDF"]) beside EEVEE's (its own output); a re-bake with Widened
     gives Cycles the widened lobes back; bad values are refused."""
-    from ndfbake import bake, nodes
+    from ndfbake import bake, lobe_nodes, nodes
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         before = h.dump_material(material)
         result = bake.bake_material(material, bake.BakeSettings(max_lobes=4, cycles_lobes=nodes.NARROWED))
         h.expect("Cycles draws the lobes narrowed at grazing views" in result.summary, result.summary)
         h.expect(_record(material)["settings"]["cycles_lobes"] == nodes.NARROWED, "record: %s" % _record(material))
-        group_node = material.node_tree.nodes["ndfbake"]
-        tree = group_node.node_tree
+        baked_node = material.node_tree.nodes["ndfbake"]
+        tree = baked_node.node_tree
         cycles, eevee = (_lobe_roughness_sources(tree, output) for output in ("BSDF", nodes.EEVEE_BSDF))
         h.expect(len(cycles) == len(eevee) == result.lobes == _principled_count(tree)
                  == _principled_count(tree, nodes.EEVEE_BSDF) and not set(cycles.values()) & set(eevee.values()),
                  "Cycles' lobes %s, EEVEE's %s, %d lobes" % (cycles, eevee, result.lobes))
         for output, sources in (("BSDF", cycles), (nodes.EEVEE_BSDF, eevee)):
             narrowing = {tree.nodes[source].inputs["Narrowing"].default_value for source in sources.values()}
-            h.expect(all(tree.nodes[source].node_tree == nodes.grazing_roughness_group() for source in sources.values())
+            h.expect(all(tree.nodes[source].node_tree == lobe_nodes.grazing_roughness_group() for source in sources.values())
                      and narrowing == {nodes.GRAZING_NARROWING[output]},
                      "%s: a lobe's roughness is not the grazing group's at its constant: %s, %s"
                      % (output, sources, narrowing))
-        h.expect(material.node_tree.get_output_node("CYCLES").inputs["Surface"].links[0].from_node == group_node,
+        h.expect(material.node_tree.get_output_node("CYCLES").inputs["Surface"].links[0].from_node == baked_node,
                  "Cycles does not draw the group")
 
         bake.bake_material(material, bake.BakeSettings(max_lobes=4, cycles_lobes=nodes.WIDENED))
@@ -355,19 +355,19 @@ def test_linked_inputs_are_carried_and_restored():
         before = h.dump_material(material)
 
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
-        group_node = _group_nodes(material)[0]
-        emission = group_node.inputs["Emission Strength"]
+        baked_node = _group_nodes(material)[0]
+        emission = baked_node.inputs["Emission Strength"]
         h.expect([(l.from_node, l.is_muted) for l in emission.links] == [(glow, True)],
                  "the muted Emission Strength link is not carried muted: %s" % [(l.from_node.name, l.is_muted)
                                                                              for l in emission.links])
         h.expect(abs(emission.default_value - 0.25) < 1e-6, "Emission Strength value under the muted link")
-        h.expect(group_node.inputs["Base Color"].links[0].from_node == rgb, "Base Color not carried")
-        h.expect(group_node.inputs["Roughness"].links[0].from_node == value, "Roughness not carried")
-        h.expect(group_node.inputs["Vector"].links[0].from_node == mapping, "texture coordinates not carried")
-        h.expect(abs(group_node.inputs["Normal Strength"].default_value - 0.8) < 1e-6, "strength")
-        h.expect(abs(group_node.inputs[specular].default_value - 0.7) < 1e-6, "Specular value")
-        h.expect(abs(group_node.inputs["Metallic"].default_value - 1.0) < 1e-6, "Metallic value")
-        inner = group_node.node_tree
+        h.expect(baked_node.inputs["Base Color"].links[0].from_node == rgb, "Base Color not carried")
+        h.expect(baked_node.inputs["Roughness"].links[0].from_node == value, "Roughness not carried")
+        h.expect(baked_node.inputs["Vector"].links[0].from_node == mapping, "texture coordinates not carried")
+        h.expect(abs(baked_node.inputs["Normal Strength"].default_value - 0.8) < 1e-6, "strength")
+        h.expect(abs(baked_node.inputs[specular].default_value - 0.7) < 1e-6, "Specular value")
+        h.expect(abs(baked_node.inputs["Metallic"].default_value - 1.0) < 1e-6, "Metallic value")
+        inner = baked_node.node_tree
         h.expect(all(n.uv_map == "UVMap" for n in inner.nodes if n.bl_idname == "ShaderNodeNormalMap"), "uv map")
         rec = material_record(material)
         h.expect(abs(rec["settings"]["roughness"] - 0.5) < 1e-6, "linked roughness: the fit uses 0.5")
@@ -380,7 +380,7 @@ def test_a_user_graph_downstream_gets_no_eevee_output():
     """The Principled feeds a Mix Shader, not the output: the graph after it is the user's, so the
     bake adds no EEVEE output (both engines draw the group's BSDF through the user's mix), and a
     displacement on the output stays where it is; Revert restores everything."""
-    from ndfbake import bake, nodes
+    from ndfbake import bake, group_node, nodes
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, metallic=1.0)
         tree = material.node_tree
@@ -395,10 +395,10 @@ def test_a_user_graph_downstream_gets_no_eevee_output():
         before = h.dump_material(material)
 
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
-        group_node = _group_nodes(material)[0]
-        h.expect(nodes.EEVEE_OUTPUT not in tree.nodes, "an EEVEE output was added behind the user's mix")
-        h.expect([l.to_node for l in group_node.outputs["BSDF"].links] == [mix], "the group does not feed the mix")
-        h.expect(not group_node.outputs[nodes.EEVEE_BSDF].is_linked, "the EEVEE BSDF is wired somewhere")
+        baked_node = _group_nodes(material)[0]
+        h.expect(group_node.EEVEE_OUTPUT not in tree.nodes, "an EEVEE output was added behind the user's mix")
+        h.expect([l.to_node for l in baked_node.outputs["BSDF"].links] == [mix], "the group does not feed the mix")
+        h.expect(not baked_node.outputs[nodes.EEVEE_BSDF].is_linked, "the EEVEE BSDF is wired somewhere")
         h.expect(tree.get_output_node("EEVEE") == output, "EEVEE no longer draws the user's output")
         bake.revert(material)
         h.expect(h.dump_material(material) == before, "material differs after revert: %s"
@@ -423,18 +423,20 @@ def test_pack_option():
 
 
 def _bake_with_a_bug_in(material, function, **settings):
-    """Bakes with nodes.<function> raising, and returns the BakeError the bake must end with."""
-    from ndfbake import bake, nodes
-    original = getattr(nodes, function)
+    """Bakes with <function> of the node modules (nodes, group_node, lod_nodes) raising, and returns
+    the BakeError the bake must end with."""
+    from ndfbake import bake, group_node, lod_nodes, nodes
+    module = next(m for m in (nodes, group_node, lod_nodes) if hasattr(m, function))
+    original = getattr(module, function)
 
     def broken(*args, **kwargs):
         raise RuntimeError("simulated bug")
-    setattr(nodes, function, broken)
+    setattr(module, function, broken)
     try:
         return h.raised(bake.BakeError, lambda: bake.bake_material(material, bake.BakeSettings(**settings)),
-                        "the simulated bug in nodes.%s did not surface" % function)
+                        "the simulated bug in %s.%s did not surface" % (module.__name__, function))
     finally:
-        setattr(nodes, function, original)
+        setattr(module, function, original)
 
 
 def test_failure_while_building_nodes_rolls_back():
@@ -907,14 +909,14 @@ def test_renamed_nodes_are_found_again():
     """Renamed after the bake, the Principled BSDF, the Normal Map, the group node and the EEVEE
     output are still the record's: a re-bake fits the Roughness set on the group node, and
     Revert restores the material exactly (names aside)."""
-    from ndfbake import bake, material_scan, nodes
+    from ndfbake import bake, group_node, material_scan, node_builders
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         tree = material.node_tree
         before = h.dump_material(material)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
         for old, new in (("Principled BSDF", "Skin"), ("Normal Map", "NM"), ("ndfbake", "Filtered"),
-                         (nodes.EEVEE_OUTPUT, "EO")):
+                         (group_node.EEVEE_OUTPUT, "EO")):
             tree.nodes[old].name = new
         tree.nodes["Filtered"].inputs["Roughness"].default_value = 0.9
         bake.bake_material(material, bake.BakeSettings(max_lobes=1))
@@ -923,7 +925,7 @@ def test_renamed_nodes_are_found_again():
                  "node's 0.9" % settings["roughness"])
         tree.nodes["ndfbake"].name = "Filtered again"
         bake.revert(material)
-        h.expect(not [n.name for n in tree.nodes if material_scan.ROLE_KEY in n.keys() or n.get(nodes.TAG)],
+        h.expect(not [n.name for n in tree.nodes if material_scan.ROLE_KEY in n.keys() or n.get(node_builders.TAG)],
                  "nodes of the bake left: %s" % [n.name for n in tree.nodes])
         skin = tree.nodes["Skin"]
         h.expect([l.to_node.name for l in skin.outputs["BSDF"].links] == ["Material Output"], "Skin not at the output")

@@ -135,7 +135,7 @@ def _render_cycles(path, width, height):
 
 
 def test_the_level_of_detail_group_renders_the_footprint_formula():
-    from ndfbake import nodes
+    from ndfbake import lod_nodes
     from ndfbake.scene_lod import STRETCH
     h.reset_scene()
     with h.scratch_dir() as directory:
@@ -146,7 +146,7 @@ def test_the_level_of_detail_group_renders_the_footprint_formula():
         plane.data.materials.append(material)
         _camera(location=(0.0, 0.0, 0.0), lens=lens)
         lod = tree.nodes.new("ShaderNodeGroup")
-        lod.node_tree = nodes.level_of_detail_group()
+        lod.node_tree = lod_nodes.level_of_detail_group()
         pixel_angle = 36.0 / lens / width
         texels_per_unit = 300.0
         lod.inputs["Texels per Unit"].default_value = texels_per_unit
@@ -173,7 +173,7 @@ def test_the_level_of_detail_group_renders_the_footprint_formula():
 
 
 def test_atlas_lookups_equal_bilinear_filtering_of_the_level_files():
-    from ndfbake import nodes
+    from ndfbake import lod_nodes
     h.reset_scene()
     with h.scratch_dir() as directory:
         normal_map = h.write_normal_map(os.path.join(directory, "weave.png"), pattern="weave", size=32)
@@ -184,7 +184,7 @@ def test_atlas_lookups_equal_bilinear_filtering_of_the_level_files():
             layout = json.load(f)["atlas"]
         atlas_image = bpy.data.images.load(os.path.join(out, "atlas_lobe1.exr"))
         atlas_image.colorspace_settings.name = "Non-Color"
-        atlas = nodes.AtlasLayout(layout["width"], layout["height"], layout["levels"])
+        atlas = lod_nodes.AtlasLayout(layout["width"], layout["height"], layout["levels"])
 
         # A plane seen from above by an orthographic camera; UVs 0..2.5 so the texture tiles.
         bpy.ops.mesh.primitive_plane_add(size=2.0)
@@ -201,10 +201,10 @@ def test_atlas_lookups_equal_bilinear_filtering_of_the_level_files():
             plane.data.materials.append(material)
             uv = tree.nodes.new("ShaderNodeTexCoord").outputs["UV"]
             table = tree.nodes.new("ShaderNodeGroup")
-            table.node_tree = nodes.atlas_table_group("table %d" % level, atlas)
+            table.node_tree = lod_nodes.atlas_table_group("table %d" % level, atlas)
             table.inputs["Level"].default_value = float(level)
             place = tree.nodes.new("ShaderNodeGroup")
-            place.node_tree = nodes.atlas_uv_group()
+            place.node_tree = lod_nodes.atlas_uv_group()
             tree.links.new(uv, place.inputs["UV"])
             for key in ("X", "Y", "W", "H"):
                 tree.links.new(table.outputs[key], place.inputs[key])
@@ -212,7 +212,7 @@ def test_atlas_lookups_equal_bilinear_filtering_of_the_level_files():
             place.inputs["Atlas Height"].default_value = float(atlas.height)
             place.inputs["Repeat"].default_value = 1.0
             coordinate = place.outputs["Atlas UV"]
-            color, _alpha = nodes._sample_atlas(tree, atlas_image, [coordinate, coordinate], 0.0, 0, 0)
+            color, _alpha = lod_nodes.sample_atlas(tree, atlas_image, [coordinate, coordinate], 0.0, 0, 0)
             tree.links.new(color, emission.inputs["Color"])
             ours = _render_cycles(os.path.join(directory, "atlas%d.exr" % level), 64, 64)[..., :3]
 

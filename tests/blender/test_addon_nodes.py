@@ -1,5 +1,5 @@
 """The lobe node group computes what native/src/math/brdf.h says, in Cycles and in EEVEE, and the
-grazing-roughness group (EEVEE's narrowed lobes) what nodes.py's formula says.
+grazing-roughness group (EEVEE's narrowed lobes) what lobe_nodes.py's formula says.
 
 Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_nodes.py -- LIB
 
@@ -8,9 +8,9 @@ the decode group's outputs read from levelLL_lobej.exr (Closest interpolation, w
 pixel under an orthographic camera): (widened roughness, 0, weight) on one row of planes and the
 tangent-space normal colour on the other. The renders (Cycles and EEVEE, Standard view transform,
 no pixel filter) must match a NumPy evaluation of the rule written from brdf.h, independently of
-nodes.py:  α'² = min(α² + 1.5/κ, 1), α = roughness², κ = (3R − R³)/(1 − R²), R ≤ 1, with 1/κ
+lobe_nodes.py:  α'² = min(α² + 1.5/κ, 1), α = roughness², κ = (3R − R³)/(1 − R²), R ≤ 1, with 1/κ
 lowered by the half-float resolution 4e-4 (io/lobe_exr.h) and kept ≥ 0. (brdf.h's amplitude is not
-part of the shading: see nodes.py.)
+part of the shading: see lobe_nodes.py.)
 
 The lobe BSDFs keep GGX, rather than Multiscatter GGX, where the material transmits (structure).
 """
@@ -51,7 +51,7 @@ def image_rgba(image):
 
 def probe_material(name, image, output):
     """Emission of the decode group's outputs for lobe image `image`."""
-    from ndfbake import nodes
+    from ndfbake import lobe_nodes
     material = bpy.data.materials.new(name)
     material.use_nodes = True
     tree = material.node_tree
@@ -60,7 +60,7 @@ def probe_material(name, image, output):
     tex.image = image
     tex.interpolation = "Closest"
     dec = tree.nodes.new("ShaderNodeGroup")
-    dec.node_tree = nodes.lobe_group()
+    dec.node_tree = lobe_nodes.lobe_group()
     dec.inputs["Roughness"].default_value = ROUGHNESS
     tree.links.new(tex.outputs["Color"], dec.inputs["Lobe"])
     tree.links.new(tex.outputs["Alpha"], dec.inputs["Lobe Z"])
@@ -173,7 +173,7 @@ GRAZING_C = 2.5                                  # the Narrowing input
 
 
 def grazing_reference(roughness, tilt_deg, base, narrowing):
-    """α″² = max(α′² / (1 + C·α′² tan²θ), α²), from nodes.grazing_roughness_group's docstring."""
+    """α″² = max(α′² / (1 + C·α′² tan²θ), α²), from lobe_nodes.grazing_roughness_group's docstring."""
     widened2, base2 = roughness ** 4, base ** 4
     c = max(np.cos(np.radians(tilt_deg)), 1e-3)
     tan2 = (1.0 - c * c) / (c * c)
@@ -184,7 +184,7 @@ def test_grazing_group_matches_its_formula_in_both_engines():
     """A grid of planes under an orthographic camera looking down (the view direction is +Z at
     every pixel), each showing as emission the group's output for one widened roughness and one
     constant lobe normal tilted from the view."""
-    from ndfbake import blender_compat, nodes
+    from ndfbake import blender_compat, lobe_nodes
     with h.scratch_dir() as directory:
         h.reset_scene()
         scene = bpy.context.scene
@@ -195,7 +195,7 @@ def test_grazing_group_matches_its_formula_in_both_engines():
                 tree = material.node_tree
                 tree.nodes.remove(tree.nodes["Principled BSDF"])
                 group = tree.nodes.new("ShaderNodeGroup")
-                group.node_tree = nodes.grazing_roughness_group()
+                group.node_tree = lobe_nodes.grazing_roughness_group()
                 group.inputs["Roughness"].default_value = roughness
                 group.inputs["Base Roughness"].default_value = GRAZING_BASE
                 group.inputs["Narrowing"].default_value = GRAZING_C

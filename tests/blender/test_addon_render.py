@@ -11,7 +11,7 @@ in every lobe, once overflowed Cycles' shader stack, which draws such a material
 emitting, half-transparent material renders as before once baked (the group draws the emission
 once). Then a white furnace: a metal plane whose tiled map puts ~75 texels in a pixel, under a
 uniform sky, keeps the original's energy within 3% once baked (0.885 before the shader dropped
-brdf.h's amplitude; see nodes.py). Image errors against
+brdf.h's amplitude; see lobe_nodes.py). Image errors against
 references: test_addon_image_error.py.
 """
 import math

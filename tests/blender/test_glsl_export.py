@@ -4,7 +4,7 @@ Blender's gpu module in a real window (under Xvfb: the module does not draw in b
 A 64² fBm map (no repeats at level 3: its texels differ) is baked by the library; a fragment
 shader that includes ndfbake.glsl fetches level-3 lobe texels (8×8 fine normals each) from the
 bake's EXR files. Checked:
-- the file's constants are the add-on's (nodes.GGX_VMF_WIDENING, HALF_INV_KAPPA_RESOLUTION), so
+- the file's constants are the add-on's (lobe_nodes.GGX_VMF_WIDENING, HALF_INV_KAPPA_RESOLUTION), so
   the shader and the Blender node group decode alike;
 - the filtered GGX distribution, the Lambert cosine and the specular term (16 directions within
   40° of the normal) against the documented rule evaluated in numpy from the same texels;
@@ -232,7 +232,7 @@ def check_flat_specular(source):
 
 
 def check(directory):
-    from ndfbake import nodes
+    from ndfbake import lobe_nodes
     normal_map = h.write_normal_map(os.path.join(directory, "fbm.png"), "fbm", 64)
     out = os.path.join(directory, "bake")
     h.bake_image_file(normal_map, out, max_lobes=4)
@@ -242,7 +242,7 @@ def check(directory):
     h.expect(shader_constant(source, "NDFB_LOBES") == 4, "ndfbake.glsl is not for 4 lobes")
     widening = shader_constant(source, "NDFB_GGX_VMF_WIDENING")
     resolution = shader_constant(source, "NDFB_INV_KAPPA_RESOLUTION")
-    h.expect(widening == nodes.GGX_VMF_WIDENING and resolution == nodes.HALF_INV_KAPPA_RESOLUTION,
+    h.expect(widening == lobe_nodes.GGX_VMF_WIDENING and resolution == lobe_nodes.HALF_INV_KAPPA_RESOLUTION,
              "ndfbake.glsl's constants (%g, %g) are not the node group's" % (widening, resolution))
     check_level(source, out, normal_map, widening, resolution)
     check_flat_specular(source)

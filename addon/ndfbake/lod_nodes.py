@@ -1,0 +1,247 @@
+"""Level of detail in shader nodes: which texel of which MIP level a pixel reads. Shared groups
+("NDFB Level of Detail", "NDFB Atlas UV"), a material's atlas table, the lookups a material's group
+makes, and the drivers that keep the footprint's camera terms live. The footprint itself is
+scene_lod.py's; nodes.py calls these while it assembles a group.
+
+Two ways to get the texel a pixel needs:
+- level of detail from the scene (AtlasLayout + scene_lod.LodPlan, the default): lobe j's MIP atlas
+  (`atlas_lobej.exr`, every fitted level framed in one image) is sampled at the level the
+  "NDFB Level of Detail" group computes from the view distance and angle (scene_lod.py), with one
+  Linear lookup in each of the two levels around it ("NDFB Atlas UV" places it inside the
+  level's frame), blended. Both engines; Cycles has no MIP levels.
+- level 0 filtered by the renderer (`level00_lobej.exr`, Linear): EEVEE MIP-maps it itself;
+  Cycles only averages its samples over the pixel.
+"""
+from dataclasses import dataclass
+
+from . import id_names, scene_lod
+from .node_builders import FLOAT, GROUP_VERSION, VECTOR, _find_group, _group_with_io, _link, _math, _mix, _vmath
+
+LOD_GROUP = "NDFB Level of Detail v%d" % GROUP_VERSION
+ATLAS_UV_GROUP = "NDFB Atlas UV v%d" % GROUP_VERSION
+LOD_INPUTS = ("Texels per Unit", "Pixel Angle", "Pixel Size")
+ATLAS_LOOKUP = "Atlas Level %d"       # the material group's atlas-table nodes (0: low, 1: high level)
+# An atlas table's name until bake._take_names names it after its group (atlas_table_name); no
+# "NDFB " name, so that it holds no name a group or table of the bake is to take.
+PROVISIONAL_TABLE_NAME = "ndfbake atlas table"
+
+
+@dataclass
+class AtlasLayout:
+    """Where the levels sit in a lobe's MIP atlas (native write option `atlas`): report.json's
+    "atlas"."""
+    width: int
+    height: int
+    levels: list                 # per level {"x", "y", "width", "height"}
+
+
+def level_of_detail_group():
+    """Level = clamp(log2(footprint), 0, Max Level) with the footprint of scene_lod.py, from the
+    distance to the camera and the angle of view at the shading point."""
+    tree = _find_group(LOD_GROUP)
+    if tree is not None:
+        return tree
+    tree, gin, gout = _group_with_io(
+        LOD_GROUP, [(FLOAT, name) for name in LOD_INPUTS + ("Max Level",)], [(FLOAT, "Level")])
+    camera = tree.nodes.new("ShaderNodeCameraData")
+    camera.location = (-900, 300)
+    geometry = tree.nodes.new("ShaderNodeNewGeometry")
+    geometry.location = (-900, -300)
+    distance = camera.outputs["View Distance"]
+    facing = _math(tree, "ABSOLUTE", _vmath(tree, "DOT_PRODUCT", geometry.outputs["Incoming"],
+                                            geometry.outputs["True Normal"], location=(-700, -300), output=1),
+                   location=(-550, -300))
+    stretch = _math(tree, "POWER", _math(tree, "MAXIMUM", facing, scene_lod.MIN_FACING, location=(-400, -300)),
+                    scene_lod.STRETCH, location=(-250, -300))
+    world = _math(tree, "MULTIPLY_ADD", distance, gin.outputs["Pixel Angle"], gin.outputs["Pixel Size"],
+                  location=(-550, 200))
+    texels = _math(tree, "DIVIDE", _math(tree, "MULTIPLY", world, gin.outputs["Texels per Unit"],
+                                         location=(-400, 200)), stretch, location=(-100, 100))
+    level = _math(tree, "LOGARITHM", _math(tree, "MAXIMUM", texels, 1e-6, location=(50, 100)), 2.0,
+                  location=(200, 100))
+    level = _math(tree, "MINIMUM", _math(tree, "MAXIMUM", level, 0.0, location=(350, 100)),
+                  gin.outputs["Max Level"], location=(500, 100))
+    tree.links.new(level, gout.inputs["Level"])
+    return tree
+
+
+def atlas_uv_group():
+    """Where one level of a MIP atlas (native bake/lobe_atlas.h; tests/native/test_lobe_atlas.cpp
+    checks this addressing) puts a texture coordinate: inputs UV, the level's frame X, Y (top-left,
+    rows counted from the top) and size W, H, the atlas size, and Repeat (1: the texture tiles, 0:
+    it clamps); output the atlas coordinate
+
+        u = (X + 1 + w_u·W) / Atlas Width,   v = (Atlas Height − 1 − Y − H + w_v·H) / Atlas Height,
+
+    w the coordinate wrapped (fract) or clamped to [0, 1]. A renderer's bilinear (Linear) lookup there
+    reads texel centres x + 0.5 of the level exactly as a lookup of the level's own file would, and
+    the frame's one-texel border (the wrapped or clamped edge) keeps it inside the level."""
+    tree = _find_group(ATLAS_UV_GROUP)
+    if tree is not None:
+        return tree
+    tree, gin, gout = _group_with_io(
+        ATLAS_UV_GROUP,
+        [(VECTOR, "UV")] + [(FLOAT, n) for n in ("X", "Y", "W", "H", "Atlas Width", "Atlas Height", "Repeat")],
+        [(VECTOR, "Atlas UV")], (-1000, 700))
+    sep = tree.nodes.new("ShaderNodeSeparateXYZ")
+    sep.location = (-800, 200)
+    tree.links.new(gin.outputs["UV"], sep.inputs[0])
+
+    def wrapped(value, y):
+        clamped = _math(tree, "MINIMUM", _math(tree, "MAXIMUM", value, 0.0, location=(-650, y)), 1.0,
+                        location=(-500, y))
+        return _mix(tree, "FLOAT", gin.outputs["Repeat"], clamped, _math(tree, "FRACT", value, location=(-500, y - 100)),
+                    (-350, y))
+
+    column = _math(tree, "MULTIPLY_ADD", wrapped(sep.outputs["X"], 300), gin.outputs["W"],
+                   _math(tree, "ADD", gin.outputs["X"], 1.0, location=(-350, 450)), location=(-150, 350))
+    row_base = _math(tree, "SUBTRACT", _math(tree, "SUBTRACT", _math(
+        tree, "SUBTRACT", gin.outputs["Atlas Height"], 1.0, location=(-500, -350)), gin.outputs["Y"],
+        location=(-350, -350)), gin.outputs["H"], location=(-200, -350))
+    row = _math(tree, "MULTIPLY_ADD", wrapped(sep.outputs["Y"], -100), gin.outputs["H"], row_base,
+                location=(-50, -150))
+    comb = tree.nodes.new("ShaderNodeCombineXYZ")
+    comb.location = (300, 0)
+    tree.links.new(_math(tree, "DIVIDE", column, gin.outputs["Atlas Width"], location=(100, 300)), comb.inputs["X"])
+    tree.links.new(_math(tree, "DIVIDE", row, gin.outputs["Atlas Height"], location=(150, -150)), comb.inputs["Y"])
+    tree.links.new(comb.outputs[0], gout.inputs["Atlas UV"])
+    return tree
+
+
+def atlas_table_name(group_name):
+    """(body, tail) of the name of a group's atlas table (id_names): "<group> atlas", the group's
+    ".NNN" kept before " atlas", its body cut to fit."""
+    body, number = id_names.numbered(group_name)
+    return body, number + " atlas"
+
+
+def atlas_table(group_tree):
+    """The atlas table (atlas_table_group) a material group looks its levels up in, or None (level
+    0): found through the group's lookup nodes, not by name (the material's name may be long)."""
+    lookup = group_tree.nodes.get(ATLAS_LOOKUP % 0)
+    return lookup.node_tree if lookup is not None and lookup.bl_idname == "ShaderNodeGroup" else None
+
+
+def atlas_table_group(name, atlas):
+    """Level → the level's frame X, Y and size W, H in the atlas: a step sum over the levels,
+    Σ_k [Level ≥ k]·(v_k − v_(k−1)), exact for integer levels."""
+    keys = ("X", "Y", "W", "H")
+    tree, gin, gout = _group_with_io(name, [(FLOAT, "Level")], [(FLOAT, key) for key in keys],
+                                     (-400, 300 + 150 * len(atlas.levels)))
+    totals = {key: 0.0 for key in keys}
+    previous = {key: 0.0 for key in keys}
+    for k, place in enumerate(atlas.levels):
+        values = dict(zip(keys, (place["x"], place["y"], place["width"], place["height"])))
+        reached = _math(tree, "GREATER_THAN", gin.outputs["Level"], k - 0.5, location=(-200 + 150 * k, 300))
+        for i, key in enumerate(keys):
+            step = float(values[key] - previous[key])
+            if step != 0.0:
+                totals[key] = _math(tree, "MULTIPLY_ADD", reached, step, totals[key],
+                                    location=(-200 + 150 * k, 150 - 150 * i))
+        previous = values
+    for key in keys:
+        _link(tree, totals[key], gout.inputs[key])
+    return tree
+
+
+def uv_source(tree, gin, has_vector, location):
+    if has_vector:
+        return gin.outputs["Vector"]
+    coordinates = tree.nodes.new("ShaderNodeTexCoord")
+    coordinates.location = location
+    return coordinates.outputs["UV"]
+
+
+def atlas_levels(tree, gin, atlas, repeat, uv):
+    """The two levels the footprint falls between: per level the atlas coordinate (atlas_uv_group),
+    and the blend factor. Computed once for every lobe: the lobes' atlases share one layout."""
+    lod = tree.nodes.new("ShaderNodeGroup")
+    lod.node_tree = level_of_detail_group()
+    lod.location = (-2000, 400)
+    for key in LOD_INPUTS:
+        tree.links.new(gin.outputs[key], lod.inputs[key])
+    lod.inputs["Max Level"].default_value = float(len(atlas.levels) - 1)
+    level = lod.outputs["Level"]
+    low = _math(tree, "FLOOR", level, location=(-1850, 400))
+    high = _math(tree, "MINIMUM", _math(tree, "ADD", low, 1.0, location=(-1700, 500)), float(len(atlas.levels) - 1),
+                 location=(-1550, 500))
+    blend = _math(tree, "SUBTRACT", level, low, location=(-1700, 300))
+    table = atlas_table_group(PROVISIONAL_TABLE_NAME, atlas)  # Blender numbers it where taken
+    coordinates = []
+    for k, index in enumerate((low, high)):
+        lookup = tree.nodes.new("ShaderNodeGroup")
+        lookup.name = lookup.label = ATLAS_LOOKUP % k
+        lookup.node_tree = table
+        lookup.location = (-1550, 300 - 250 * k)
+        tree.links.new(index, lookup.inputs["Level"])
+        place = tree.nodes.new("ShaderNodeGroup")
+        place.node_tree = atlas_uv_group()
+        place.location = (-1350, 300 - 250 * k)
+        tree.links.new(uv, place.inputs["UV"])
+        for key in ("X", "Y", "W", "H"):
+            tree.links.new(lookup.outputs[key], place.inputs[key])
+        place.inputs["Atlas Width"].default_value = float(atlas.width)
+        place.inputs["Atlas Height"].default_value = float(atlas.height)
+        place.inputs["Repeat"].default_value = 1.0 if repeat else 0.0
+        coordinates.append(place.outputs["Atlas UV"])
+    return coordinates, blend
+
+
+def sample_atlas(tree, image, coordinates, blend, j, y):
+    """Lobe j's RGBA at the shading point: the renderer's bilinear lookup in each of the two levels
+    (one Linear lookup a level, at atlas_uv_group's coordinate), blended. Measured against four
+    Closest lookups and bilinear weights in nodes (what this group did before): the same
+    image in Cycles, whose Linear lookup is plain bilinear; see README for EEVEE, which MIP-maps
+    Linear images."""
+    colors, alphas = [], []
+    for k, coordinate in enumerate(coordinates):
+        tex = tree.nodes.new("ShaderNodeTexImage")
+        tex.name = tex.label = "Lobe %d level %s" % (j, "low" if k == 0 else "high")
+        tex.image = image
+        tex.interpolation = "Linear"
+        tex.extension = "EXTEND"  # the frames hold the wrap; never read past the atlas
+        tex.location = (-1150, y - 200 * k)
+        tree.links.new(coordinate, tex.inputs["Vector"])
+        colors.append(tex.outputs["Color"])
+        alphas.append(tex.outputs["Alpha"])
+    return (_mix(tree, "VECTOR", blend, colors[0], colors[1], (-950, y)),
+            _mix(tree, "FLOAT", blend, alphas[0], alphas[1], (-950, y - 150)))
+
+
+def sample_level0(tree, gin, image, image_texture, has_vector, j, y):
+    tex = tree.nodes.new("ShaderNodeTexImage")
+    tex.name = tex.label = "Lobe %d" % j
+    tex.image = image
+    # Linear, whatever the original uses: EEVEE filters (and MIP-maps) linear textures only,
+    # and the filtered look is the point. Extension and projection follow the original.
+    tex.interpolation = "Linear"
+    tex.extension = image_texture.extension
+    tex.projection = image_texture.projection
+    tex.projection_blend = image_texture.projection_blend
+    tex.location = (-1100, y)
+    if has_vector:
+        tree.links.new(gin.outputs["Vector"], tex.inputs["Vector"])
+    return tex.outputs["Color"], tex.outputs["Alpha"]
+
+
+def drive_lod_inputs(node, scene, camera_object):
+    """Drivers that keep the group node's Pixel Angle (perspective) or Pixel Size (orthographic)
+    equal to scene_lod.camera_footprint's as the camera's lens, sensor (size and fit) or the render
+    resolution (size, percentage, pixel aspect) change (a 50% preview, a focal-length animation). Simple expressions only: Blender evaluates
+    them without Python, so they work in files whose scripts are not trusted. Panoramic cameras
+    and the texel density (a property of the meshes) keep their baked values."""
+    formula = scene_lod.footprint_driver(camera_object)
+    if formula is None:
+        return
+    socket, expression, variables = formula
+    driver = node.inputs[socket].driver_add("default_value").driver
+    driver.type = "SCRIPTED"
+    driver.expression = expression
+    owners = {"CAMERA": camera_object.data, "SCENE": scene}
+    for name, id_type, path in variables:
+        var = driver.variables.new()
+        var.name = name
+        var.type = "SINGLE_PROP"
+        var.targets[0].id_type = id_type
+        var.targets[0].id = owners[id_type]
+        var.targets[0].data_path = path
