@@ -35,7 +35,7 @@ EEVEE_BSDF = "EEVEE BSDF"             # the group's second shader output (narrow
 # BakeSettings.cycles_lobes: what the group's BSDF output (Cycles' view) draws.
 WIDENED, NARROWED = "WIDENED", "NARROWED"
 # C of grazing_roughness_group, per group output (the engine that draws it).
-GRAZING_NARROWING = {"BSDF": 1.0, EEVEE_BSDF: 1.0}
+GRAZING_NARROWING = {"BSDF": 4.0, EEVEE_BSDF: 1.0}
 # Principled inputs the lobe group computes itself rather than passing through.
 COMPUTED_INPUTS = {"Normal", "Roughness"}
 # Principled inputs the group draws once, beside the lobes, rather than in every lobe (_emission).

@@ -4,7 +4,8 @@ Blender's gpu module in a real window (under Xvfb: the module does not draw in b
 A 64² fBm map (no repeats at level 3: its texels differ) is baked by the library; a fragment
 shader that includes ndfbake.glsl fetches level-3 lobe texels (8×8 fine normals each) from the
 bake's EXR files. Checked:
-- the file's constants are the add-on's (lobe_nodes.GGX_VMF_WIDENING, HALF_INV_KAPPA_RESOLUTION), so
+- the file's constants are the add-on's (lobe_nodes.GGX_VMF_WIDENING, HALF_INV_KAPPA_RESOLUTION, and
+  the grazing narrowing of Cycles' lobes, nodes.GRAZING_NARROWING), so
   the shader and the Blender node group decode alike;
 - the filtered GGX distribution, the Lambert cosine and the specular term (16 directions within
   40° of the normal) against the documented rule evaluated in numpy from the same texels;
@@ -119,9 +120,9 @@ def shader_constant(source, name):
     return float(match.group(1))
 
 
-def documented_rule(texels, directions, widening, resolution):
+def documented_rule(texels, directions, widening, resolution, narrowing):
     """(filtered D, Lambert cosine, specular with f0 = 1 for VIEW) per texel and direction, as
-    ndfbake.glsl's header states them."""
+    ndfbake.glsl's header states them (the specular's α narrowed toward VIEW)."""
     weight = np.maximum(texels[..., 0], 0.0)                       # (lobes, H, W)
     r = texels[..., 1:] / np.maximum(texels[..., :1], 1e-6)
     R = np.minimum(np.linalg.norm(r, axis=-1), 1.0)
@@ -134,9 +135,13 @@ def documented_rule(texels, directions, widening, resolution):
     half /= np.linalg.norm(half, axis=-1, keepdims=True)
     cos_view = np.einsum("lyxc,c->lyx", mu, VIEW)[..., None]
     cos_half = np.einsum("lyxc,dc->lyxd", mu, half)
+    # α_c² = max(α'² / (1 + C·α'² tan²θ_v), α²), cos θ_v floored at 1e-3.
+    c = np.maximum(cos_view, 1e-3)
+    tan2 = (1.0 - c * c) / (c * c)
+    narrowed = np.sqrt(np.maximum(alpha ** 2 / (1.0 + narrowing * alpha ** 2 * tan2), GGX_ALPHA ** 2))
     # f · cos l about the lobe's normal = D G1(v) G1(l) / (4 cos v), where both cosines are > 0.
-    specular = np.where((cos > 0) & (cos_view > 0), ggx_d(cos_half, alpha) * smith_g1(cos_view, alpha)
-                        * smith_g1(cos, alpha) / (4.0 * np.maximum(cos_view, 1e-6)), 0.0)
+    specular = np.where((cos > 0) & (cos_view > 0), ggx_d(cos_half, narrowed) * smith_g1(cos_view, narrowed)
+                        * smith_g1(cos, narrowed) / (4.0 * np.maximum(cos_view, 1e-6)), 0.0)
     total = weight.sum(axis=0)[..., None]
     w = weight[..., None]
     return ((w * ggx_d(cos, alpha)).sum(axis=0) / total, (w * np.maximum(cos, 0.0)).sum(axis=0) / total,
@@ -188,13 +193,13 @@ def relative_l2(approximation, exact):
     return np.sqrt(((approximation - exact) ** 2).sum(axis=-1) / (exact ** 2).sum(axis=-1))
 
 
-def check_level(source, out, normal_map, widening, resolution):
+def check_level(source, out, normal_map, widening, resolution, narrowing):
     lobes = [image_pixels(os.path.join(out, "level%02d_lobe%d.exr" % (LEVEL, j))) for j in range(4)]
     distinct = len({tuple(np.round(t, 4).ravel()) for t in np.stack(lobes, axis=2).reshape(-1, 16)})
     h.expect(distinct >= 32, "only %d distinct level-%d texels: the map repeats" % (distinct, LEVEL))
     directions = cap_directions(DIRECTIONS, MAX_CONE)
     out_gpu = run_shader(source, lobes, directions, 0, GGX_ALPHA)
-    rule = documented_rule(np.stack(lobes), directions, widening, resolution)
+    rule = documented_rule(np.stack(lobes), directions, widening, resolution, narrowing)
     gaps = [float(np.max(np.abs(out_gpu[..., i] - rule[i]) / np.maximum(np.abs(rule[i]), 1e-2))) for i in range(3)]
     print("GLSL against its documented rule (%d distinct texels): filtered D %.1e, Lambert cosine %.1e, "
           "specular %.1e (relative)" % (distinct, *gaps))
@@ -232,7 +237,7 @@ def check_flat_specular(source):
 
 
 def check(directory):
-    from ndfbake import lobe_nodes
+    from ndfbake import lobe_nodes, nodes
     normal_map = h.write_normal_map(os.path.join(directory, "fbm.png"), "fbm", 64)
     out = os.path.join(directory, "bake")
     h.bake_image_file(normal_map, out, max_lobes=4)
@@ -242,9 +247,11 @@ def check(directory):
     h.expect(shader_constant(source, "NDFB_LOBES") == 4, "ndfbake.glsl is not for 4 lobes")
     widening = shader_constant(source, "NDFB_GGX_VMF_WIDENING")
     resolution = shader_constant(source, "NDFB_INV_KAPPA_RESOLUTION")
-    h.expect(widening == lobe_nodes.GGX_VMF_WIDENING and resolution == lobe_nodes.HALF_INV_KAPPA_RESOLUTION,
-             "ndfbake.glsl's constants (%g, %g) are not the node group's" % (widening, resolution))
-    check_level(source, out, normal_map, widening, resolution)
+    narrowing = shader_constant(source, "NDFB_GRAZING_NARROWING")
+    h.expect(widening == lobe_nodes.GGX_VMF_WIDENING and resolution == lobe_nodes.HALF_INV_KAPPA_RESOLUTION
+             and narrowing == nodes.GRAZING_NARROWING["BSDF"],
+             "ndfbake.glsl's constants (%g, %g, %g) are not the node group's" % (widening, resolution, narrowing))
+    check_level(source, out, normal_map, widening, resolution, narrowing)
     check_flat_specular(source)
 
 

@@ -8,8 +8,8 @@ namespace ndfbake {
 
 namespace {
 
-// @SLOTS@: lobe slots, @WIDENING@: kGgxVmfWidening, @RESOLUTION@: kHalfInvKappaResolution or 0.
-// The decoding is addon/ndfbake/nodes.py's lobe group; tests/blender/test_glsl_export.py runs this
+// @SLOTS@: lobe slots, @WIDENING@: kGgxVmfWidening, @RESOLUTION@: kHalfInvKappaResolution or 0,
+// @NARROWING@: kGrazingNarrowing. The decoding is addon/ndfbake/lobe_nodes.py's lobe group; tests/blender/test_glsl_export.py runs this
 // file against the same rule with the add-on's constants.
 constexpr std::string_view kShader = R"glsl(// ndfbake.glsl: shading with the filtered normal distribution stored in this folder's lobe
 // textures (Han et al. 2007, "Frequency Domain Normal Map Filtering"), for real-time engines.
@@ -41,8 +41,11 @@ constexpr std::string_view kShader = R"glsl(// ndfbake.glsl: shading with the fi
 // node group, each lobe is normalized about its own normal; the library's error measure also
 // scales a widened lobe by the integral ratio of D_alpha and D_alpha' (brdf.h), which changes
 // the filtered distribution by a few percent (relative L2 0.100 with it against 0.106 without,
-// measured at alpha = 0.2) and which NDFB_GGX_VMF_WIDENING was chosen with. Directions are in
-// tangent space.
+// measured at alpha = 0.2) and which NDFB_GGX_VMF_WIDENING was chosen with. ndfb_ggx_specular
+// narrows each lobe toward grazing views, alpha_c^2 = max(alpha'^2 / (1 + NDFB_GRAZING_NARROWING
+// * alpha'^2 * tan^2(theta)), alpha^2), theta between the view and the lobe's normal: a microfacet
+// lobe weights its facets by their area seen from the view, the normal map it stands for does not
+// (ndfbake's docs/grazing-fit.md; a flat texel is left as it is). Directions are in tangent space.
 
 #ifdef GL_ES
 precision highp float;
@@ -51,6 +54,7 @@ precision highp float;
 #define NDFB_LOBES @SLOTS@
 #define NDFB_GGX_VMF_WIDENING @WIDENING@
 #define NDFB_INV_KAPPA_RESOLUTION @RESOLUTION@
+#define NDFB_GRAZING_NARROWING @NARROWING@
 #define NDFB_PI 3.14159265358979
 
 struct NdfbLobe {
@@ -81,6 +85,16 @@ float ndfb_ggx_d(float cos_theta, float alpha)
     // c²(α² − 1) + 1, written so that α² − 1 cannot round to −1 at small α (d = 0 at the peak).
     float d = a2 * cos_theta * cos_theta + (1.0 - cos_theta) * (1.0 + cos_theta);
     return a2 / (NDFB_PI * d * d);
+}
+
+// A lobe's widened alpha' narrowed for a view at cos = n.v from its normal (n.v floored at 1e-3,
+// about 89.94 degrees, so that tan^2 stays finite), never below the material's alpha.
+float ndfb_grazing_alpha(float widened_alpha, float ggx_alpha, float cos_view)
+{
+    float c = max(cos_view, 1e-3);
+    float tan2 = (1.0 - c * c) / (c * c);
+    float w2 = widened_alpha * widened_alpha;
+    return sqrt(max(w2 / (1.0 + NDFB_GRAZING_NARROWING * w2 * tan2), ggx_alpha * ggx_alpha));
 }
 
 // Smith's masking for GGX, G1(v) for cos = n.v > 0.
@@ -115,8 +129,8 @@ float ndfb_filtered_ggx_d(vec4 texels[NDFB_LOBES], float ggx_alpha, vec3 h)
 }
 
 // Specular reflection for view v and light l (unit, tangent space, pointing away from the
-// surface): each lobe's GGX BRDF (Smith masking, Schlick Fresnel from f0) times the cosine of l
-// about that lobe's normal, weighted. Multiply by the light's radiance; do not multiply by a
+// surface): each lobe's GGX BRDF (Smith masking, Schlick Fresnel from f0; its alpha narrowed
+// toward grazing views, ndfb_grazing_alpha) times the cosine of l about that lobe's normal, weighted. Multiply by the light's radiance; do not multiply by a
 // cosine again.
 vec3 ndfb_ggx_specular(vec4 texels[NDFB_LOBES], float ggx_alpha, vec3 f0, vec3 v, vec3 l)
 {
@@ -129,8 +143,9 @@ vec3 ndfb_ggx_specular(vec4 texels[NDFB_LOBES], float ggx_alpha, vec3 f0, vec3 v
         NdfbLobe lobe = ndfb_lobe(t[j], ggx_alpha);
         float nv = dot(lobe.normal, v), nl = dot(lobe.normal, l);
         if (lobe.weight <= 0.0 || nv <= 0.0 || nl <= 0.0) continue;
-        sum += lobe.weight * ndfb_ggx_d(dot(lobe.normal, h), lobe.alpha) * ndfb_ggx_g1(nv, lobe.alpha) *
-               ndfb_ggx_g1(nl, lobe.alpha) / (4.0 * nv);
+        float alpha = ndfb_grazing_alpha(lobe.alpha, ggx_alpha, nv);
+        sum += lobe.weight * ndfb_ggx_d(dot(lobe.normal, h), alpha) * ndfb_ggx_g1(nv, alpha) *
+               ndfb_ggx_g1(nl, alpha) / (4.0 * nv);
     }
     return fresnel * (sum / total);
 }
@@ -173,6 +188,7 @@ std::string lobe_shader_glsl(int slots, PixelPrecision precision)
     std::string shader(kShader);
     replace_all(shader, "@SLOTS@", std::to_string(slots));
     replace_all(shader, "@WIDENING@", glsl_float(kGgxVmfWidening));
+    replace_all(shader, "@NARROWING@", glsl_float(kGrazingNarrowing));
     replace_all(shader, "@RESOLUTION@",
                 glsl_float(precision == PixelPrecision::half ? kHalfInvKappaResolution : 0.0f));
     return shader;

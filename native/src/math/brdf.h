@@ -103,6 +103,13 @@ inline constexpr float kMaxBlinnPhongExponent = 1e4f;
 // 0.32, 1.5 gives 0.31, 2.0 (the Beckmann slope-variance derivation, and Filament's rule) gives
 // 0.38, and 0.5 (Neubelt & Pettineo's 1/(2κ)) 0.98.
 inline constexpr float kGgxVmfWidening = 1.5f;
+// A widened lobe narrowed toward grazing views, for shading (not fitting): the roughness a lobe is
+// drawn with is α_c² = max(α'² / (1 + kGrazingNarrowing·α'²·tan²θ), α²), θ between the view and the
+// lobe's normal, because a microfacet lobe weights its facets by their projected area toward the
+// view and a normal map's fine normals are not (docs/grazing-fit.md: fitted offline against the
+// normal map's own response in Cycles' model; docs/rendering.md, "Grazing views", for the renders).
+// The add-on's Cycles lobes use it (lobe_nodes, nodes.GRAZING_NARROWING), and ndfbake.glsl.
+inline constexpr float kGrazingNarrowing = 4.0f;
 
 // Beckmann RMS slope limits, as for GGX's α.
 inline constexpr float kMinBeckmannSlope = 1e-4f;
