@@ -85,10 +85,9 @@ def _arguments():
                         help="scene (default): the node group picks a level per pixel from the scene camera and "
                              "only the levels the cameras reach are baked; renderer: level 0, filtered by the "
                              "renderer (EEVEE's own MIP levels)")
-    parser.add_argument("--cycles-lobes", choices=("widened", "narrowed"), default="widened",
-                        help="what Cycles draws: widened (default) lobes, the fewest fireflies at low sample "
-                             "counts, or the lobes EEVEE draws, narrowed toward grazing views: closer to the "
-                             "filtered look once converged")
+    parser.add_argument("--cycles-lobes", choices=("widened", "narrowed"), default="narrowed",
+                        help="what Cycles draws: lobes narrowed toward grazing views (default: the filtered "
+                             "look's brightness there), or widened only: the fewest fireflies at low sample counts")
     parser.add_argument("--pack", action="store_true", help="also pack the lobe textures into the .blend")
     parser.add_argument("--revert", action="store_true", help="undo earlier bakes instead of baking")
     saving = parser.add_mutually_exclusive_group()

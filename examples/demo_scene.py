@@ -528,7 +528,7 @@ def bake_all(scene, max_lobes=MAX_LOBES, **settings):
 
 
 def run_demo(out, width=320, height=180, reference_samples=256, samples=16, eevee_samples=64,
-             eevee_reference_samples=None, world=DEFAULT_WORLD, cycles_lobes="WIDENED", log=print):
+             eevee_reference_samples=None, world=DEFAULT_WORLD, cycles_lobes="NARROWED", log=print):
     """Builds, renders, bakes, renders, measures; writes DIR's files and returns the report."""
     started = time.perf_counter()
     out = os.path.abspath(out)
@@ -605,7 +605,7 @@ def _arguments():
     parser.add_argument("--eevee-reference-samples", type=int, default=None,
                         help="EEVEE TAA samples of the supersampled reference (default: 1024 / factor², at least 16)")
     parser.add_argument("--world", default=DEFAULT_WORLD, choices=world_names(), help="Blender's studio world")
-    parser.add_argument("--cycles-lobes", choices=("widened", "narrowed"), default="widened",
+    parser.add_argument("--cycles-lobes", choices=("widened", "narrowed"), default="narrowed",
                         help="the bake's Cycles Lobes setting")
     parser.add_argument("--library", help="libndfbake.so (default $NDFBAKE_LIBRARY or build/native/libndfbake.so)")
     return parser.parse_args(argv)

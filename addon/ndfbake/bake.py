@@ -30,12 +30,12 @@ Files (choices the design leaves open):
   texture with box, sphere or tube projection (no UV for the atlas lookup) or with coordinates
   the nodes do not tie to one UV map (scene_lod.texture_uv) gets "RENDERER", and the summary
   says why.
-  README gives the measurement behind the default.
+  docs/rendering.md ("Level of detail") gives the measurement behind the default.
 - Cycles lobes (BakeSettings.cycles_lobes): EEVEE always draws the lobes narrowed at grazing
-  views; Cycles draws the widened ones (WIDENED, default: the fewest fireflies at low sample
-  counts under a small bright light such as an HDR's sun) or the same narrowed ones (NARROWED:
-  closer to the filtered reference once converged). nodes.py and README ("Open problems") say
-  what was measured.
+  views; Cycles draws them narrowed with its own constant (NARROWED, default: the far ground's
+  converged brightness within 10% of the reference under most of Blender's studio worlds) or
+  widened only (WIDENED: the fewest fireflies at low sample counts under a small bright light,
+  too bright or too dark at grazing views). docs/rendering.md ("Grazing views") has the figures.
 """
 import json
 import os
@@ -64,7 +64,7 @@ class BakeSettings:
     threads: int = 0            # 0: every core
     pack: bool = False          # also pack the lobe textures into the .blend
     level_of_detail: str = "SCENE"  # "SCENE": atlases at a level from the camera; "RENDERER": level 0
-    cycles_lobes: str = nodes.WIDENED  # what Cycles draws: WIDENED lobes or the NARROWED ones EEVEE draws
+    cycles_lobes: str = nodes.NARROWED  # what Cycles draws: lobes NARROWED toward grazing views, or WIDENED only
 
 
 class BakeError(Exception):
@@ -521,8 +521,8 @@ def finish(job):
             job.lod.texels_per_unit, job.lod.footprint_max)
     else:
         summary += "; level 0 filtered by the renderer" + (" (%s)" % job.lod_note if job.lod_note else "")
-    if job.settings.cycles_lobes == nodes.NARROWED:
-        summary += "; Cycles draws the lobes narrowed at grazing views"
+    if job.settings.cycles_lobes == nodes.WIDENED:
+        summary += "; Cycles draws the lobes widened only (not narrowed at grazing views)"
     rec = {
         "version": RECORD_VERSION,
         "folder": job.folder,

@@ -207,9 +207,7 @@ def add_eevee_output(material_tree, node, bypassed):
     Cycles goes on drawing the All output, fed by the group's BSDF. Added only where that output is
     the Principled's one destination, it is the active one, and the material has no EEVEE output
     yet: elsewhere (shader mixes, outputs per engine the user made) the graph downstream is the
-    user's, and both engines draw the group's BSDF. With cycles_lobes NARROWED both outputs draw
-    the same lobes and this output changes nothing that EEVEE draws; it is added all the same, so
-    that a bake's nodes and a re-bake that switches the setting stay one layout. Returns the new
+    user's, and both engines draw the group's BSDF. Returns the new
     node's name, or ""; on an error, removes what it added."""
     nodes = material_tree.nodes
     if len(bypassed) != 1 or any(n.bl_idname == "ShaderNodeOutputMaterial" and n.target == "EEVEE" for n in nodes):

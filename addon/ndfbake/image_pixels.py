@@ -48,7 +48,7 @@ def read(image):
     # An 8-bit image: Blender holds code k as the float k / 255. The library decodes a file's code
     # as (2k - 255) / 255 computed in double (io/normal_samples.h, code_to_component); handing it
     # that value, signed, gives the same normals to the last bit as `ndfbake bake FILE`, whose
-    # EM would otherwise break a symmetric NDF's ties the other way (README, "Symmetric NDFs").
+    # EM would otherwise break a symmetric NDF's ties the other way (docs/fit.md, "Open problems").
     codes = np.rint(rows[..., :3].astype(np.float64) * BYTE_MAX)
     components = ((2.0 * codes - BYTE_MAX) / BYTE_MAX).astype(np.float32)
     return Pixels(np.ascontiguousarray(components), width, height, 3, True)

@@ -93,20 +93,18 @@ def grazing_roughness_group():
 
         α″² = max(α′² / (1 + C·α′² tan²θ), α²),   θ between the view and the lobe's normal.
 
-    Why: a widened GGX lobe loses far more of its light at grazing views in EEVEE than the fine
-    normals' narrow lobes do (the far ground of the demo scene under sunset rendered 25% darker
-    than its supersampled reference). The narrowing grows with α′ tan θ, the quantity GGX's
-    masking grows with, and stops at the original roughness; for α′ tan θ ≫ 1, α″ → 1/tan θ,
-    which keeps the lobe's facets out of the foreshortening a microfacet lobe applies at grazing
-    views and a normal map does not (README, Open problems: bias at grazing views). Measured
-    (EEVEE block error against the supersampled reference, ratio to the naive map's; far ground /
-    far spheres; sunset, 4 lobes; demo 320×180 and test 128×72): no narrowing 1.11 / 0.49 and
-    1.18 / 0.31; α′²(1 + α′² tan²θ)^(−p) with p = 1/3 0.40 / 0.48 and 0.55 / 0.34, p = 1/2
-    0.31 / 0.47 and 0.40 / 0.34, p = 1 (this) 0.25 / 0.44 and 0.29 / 0.33, with the far ground's
-    mean luminance 2.11 against the reference's 2.16 (p = 2 overshoots it: 2.21). Cycles draws the
-    widened lobes unless the bake's cycles_lobes is NARROWED: there narrowed sun glints at grazing
-    views come out as fireflies at 16 samples per pixel, though converged they are closer (README,
-    open problems)."""
+    Why: a microfacet lobe weights its facets by their area seen from the view, (h·v)/(μ·v)·G, and
+    loses those turned away; the normal map it stands for has no masking between its fine normals,
+    and each fine normal's own 1/(n·v) cancels its projected area. So at grazing views a widened
+    lobe reflects light from higher above the horizon than the map does (Cycles' far ground 1.57×
+    the reference's brightness under Blender's city world, 0.64× under courtyard). The narrowing
+    grows with α′ tan θ, the quantity GGX's masking grows with, and stops at the original
+    roughness, so a flat map (κ → ∞, α′ = α) is left exactly as it is. C was fitted offline
+    against the normal map's own response (docs/grazing-fit.md: 4 for Cycles' GGX) and measured
+    on the demo scene under the 8 studio worlds (examples/world_sweep.py; docs/rendering.md,
+    "Grazing views"). The first form (C = 1, EEVEE only, 2026-11-25) was chosen on EEVEE's
+    sunset ground, which widened lobes rendered 25% too dark.
+    """
     tree = _find_group(GRAZING_GROUP)
     if tree is not None:
         return tree

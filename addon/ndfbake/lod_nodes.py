@@ -190,9 +190,9 @@ def atlas_levels(tree, gin, atlas, repeat, uv):
 def sample_atlas(tree, image, coordinates, blend, j, y):
     """Lobe j's RGBA at the shading point: the renderer's bilinear lookup in each of the two levels
     (one Linear lookup a level, at atlas_uv_group's coordinate), blended. Measured against four
-    Closest lookups and bilinear weights in nodes (what this group did before): the same
-    image in Cycles, whose Linear lookup is plain bilinear; see README for EEVEE, which MIP-maps
-    Linear images."""
+    Closest lookups and bilinear weights in nodes (what this group did before): the same image in
+    Cycles, whose Linear lookup is plain bilinear; EEVEE MIP-maps Linear images (docs/rendering.md,
+    "Level of detail")."""
     colors, alphas = [], []
     for k, coordinate in enumerate(coordinates):
         tex = tree.nodes.new("ShaderNodeTexImage")

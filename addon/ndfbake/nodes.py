@@ -34,8 +34,11 @@ RETIRED_GROUPS = tuple("NDFB %s v2" % name for name in ("vMF Lobe", "Grazing Rou
 EEVEE_BSDF = "EEVEE BSDF"             # the group's second shader output (narrowed lobes)
 # BakeSettings.cycles_lobes: what the group's BSDF output (Cycles' view) draws.
 WIDENED, NARROWED = "WIDENED", "NARROWED"
-# C of grazing_roughness_group, per group output (the engine that draws it).
-GRAZING_NARROWING = {"BSDF": 4.0, EEVEE_BSDF: 1.0}
+# C of lobe_nodes.grazing_roughness_group, per group output (the engine that draws it): Cycles'
+# fitted offline against the normal map's own response (docs/grazing-fit.md; brdf.h
+# kGrazingNarrowing, which ndfbake.glsl uses too), EEVEE's measured on the demo scene
+# (examples/world_sweep.py; docs/rendering.md, "Grazing views").
+GRAZING_NARROWING = {"BSDF": 4.0, EEVEE_BSDF: 8.0}
 # Principled inputs the lobe group computes itself rather than passing through.
 COMPUTED_INPUTS = {"Normal", "Roughness"}
 # Principled inputs the group draws once, beside the lobes, rather than in every lobe (_emission).
@@ -97,13 +100,14 @@ def held_input(socket, current, name):
 
 
 def build_material_group(name, principled, normal_map, image_texture, lobe_images, atlas=None, lod=None,
-                         current=None, cycles_lobes=WIDENED):
+                         current=None, cycles_lobes=NARROWED):
     """A group with the carried Principled inputs (+ Normal Strength, + Vector if the original
     texture's has a live (unmuted) link, + the level-of-detail constants with an atlas) and the
     BSDF and EEVEE BSDF outputs, shading through len(lobe_images) lobes: level-0 textures that
     the renderer filters itself (atlas None), or MIP atlases (AtlasLayout) sampled at the level
-    of detail the scene gives (lod: a scene_lod.LodPlan, required with an atlas). BSDF draws the
-    widened lobes, or with cycles_lobes NARROWED the narrowed ones EEVEE BSDF draws. For a
+    of detail the scene gives (lod: a scene_lod.LodPlan, required with an atlas). Each output's
+    lobes are narrowed toward grazing views with its constant (GRAZING_NARROWING), BSDF's not
+    with cycles_lobes WIDENED. For a
     re-bake, `current` is the group node of the bake it replaces, which holds the Principled's
     inputs (held_input)."""
     tree = _new_group(name)
@@ -171,18 +175,8 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         for output, (dy, _) in layout.items():
             roughness = dec.outputs["Roughness"]
             if output == EEVEE_BSDF or cycles_lobes == NARROWED:
-                grazing = tree.nodes.new("ShaderNodeGroup")
-                grazing.node_tree = lobe_nodes.grazing_roughness_group()
-                grazing.name = grazing.label = "Grazing %d %s" % (j, output)
-                grazing.location = (-300, y + dy - 150)
-                tree.links.new(dec.outputs["Roughness"], grazing.inputs["Roughness"])
-                if "Roughness" in names:
-                    tree.links.new(gin.outputs["Roughness"], grazing.inputs["Base Roughness"])
-                else:
-                    grazing.inputs["Base Roughness"].default_value = dec.inputs["Roughness"].default_value
-                tree.links.new(nm, grazing.inputs["Normal"])
-                grazing.inputs["Narrowing"].default_value = GRAZING_NARROWING[output]
-                roughness = grazing.outputs["Roughness"]
+                roughness = _grazing_roughness(tree, gin, dec, nm, names, "Grazing %d %s" % (j, output),
+                                               GRAZING_NARROWING[output], (-300, y + dy - 150))
             shaders[output].append(_lobe_bsdf(tree, gin, principled, carried, roughness, nm,
                                               "Lobe %d %s" % (j, output), (0, y + dy), multiscatter, kind))
         weights.append(dec.outputs["Weight"])
@@ -204,6 +198,23 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     tree.links.new(sums[EEVEE_BSDF], gout.inputs[EEVEE_BSDF])
     tree.links.new(sums["BSDF"], gout.inputs["BSDF"])
     return tree
+
+
+def _grazing_roughness(tree, gin, decode, normal, names, name, narrowing, location):
+    """The decoded lobe's roughness narrowed toward grazing views (lobe_nodes.grazing_roughness_group)
+    with constant `narrowing`, about the lobe's world normal `normal`."""
+    grazing = tree.nodes.new("ShaderNodeGroup")
+    grazing.node_tree = lobe_nodes.grazing_roughness_group()
+    grazing.name = grazing.label = name
+    grazing.location = location
+    tree.links.new(decode.outputs["Roughness"], grazing.inputs["Roughness"])
+    if "Roughness" in names:
+        tree.links.new(gin.outputs["Roughness"], grazing.inputs["Base Roughness"])
+    else:
+        grazing.inputs["Base Roughness"].default_value = decode.inputs["Roughness"].default_value
+    tree.links.new(normal, grazing.inputs["Normal"])
+    grazing.inputs["Narrowing"].default_value = narrowing
+    return grazing.outputs["Roughness"]
 
 
 def _add_shader(tree, a, b, location):

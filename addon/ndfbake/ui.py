@@ -26,12 +26,12 @@ class NDFBakeSettings(bpy.types.PropertyGroup):
                ("RENDERER", "Renderer", "Sample level 0 and leave filtering to the renderer (EEVEE MIP-maps it; "
                 "Cycles does not)")))
     cycles_lobes: EnumProperty(
-        name="Cycles Lobes", default=nodes.WIDENED,
-        items=((nodes.WIDENED, "Widened", "Cycles draws each lobe widened by its spread: the fewest fireflies at "
-                "low sample counts under a small bright light (an HDR's sun), darker than the filtered look at "
-                "grazing views"),
-               (nodes.NARROWED, "Narrowed", "Cycles draws the lobes EEVEE draws, narrowed toward grazing views: "
-                "closer to the filtered look once converged (film sample counts), noisier at low ones")))
+        name="Cycles Lobes", default=nodes.NARROWED,
+        items=((nodes.NARROWED, "Narrowed", "Cycles draws each lobe narrowed toward grazing views, as the normal map "
+                "it stands for reflects there: the filtered look's brightness at grazing views"),
+               (nodes.WIDENED, "Widened", "Cycles draws each lobe widened by its spread only: the fewest fireflies "
+                "at low sample counts under a small bright light (an HDR's sun), too bright or too dark at "
+                "grazing views")))
 
 
 def _wrapped(layout, text, icon="NONE", width=60):

@@ -219,16 +219,16 @@ def _lobe_roughness_sources(tree, output):
     return found
 
 
-def test_cycles_lobes_narrowed_draws_the_eevee_lobes_everywhere():
-    """Cycles Lobes: Narrowed gives Cycles' lobes (the user's output) a grazing narrowing of their
-    own (nodes.GRAZING_NARROWING["BSDF"]) beside EEVEE's (its own output); a re-bake with Widened
-    gives Cycles the widened lobes back; bad values are refused."""
+def test_cycles_lobes_narrowed_or_widened():
+    """Cycles Lobes: Narrowed (the default) gives Cycles' lobes (the user's output) a grazing
+    narrowing of their own (nodes.GRAZING_NARROWING["BSDF"]) beside EEVEE's (its own output); a
+    re-bake with Widened gives Cycles the widened lobes only; bad values are refused."""
     from ndfbake import bake, lobe_nodes, nodes
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         before = h.dump_material(material)
         result = bake.bake_material(material, bake.BakeSettings(max_lobes=4, cycles_lobes=nodes.NARROWED))
-        h.expect("Cycles draws the lobes narrowed at grazing views" in result.summary, result.summary)
+        h.expect("widened only" not in result.summary, result.summary)
         h.expect(_record(material)["settings"]["cycles_lobes"] == nodes.NARROWED, "record: %s" % _record(material))
         baked_node = material.node_tree.nodes["ndfbake"]
         tree = baked_node.node_tree
@@ -245,7 +245,8 @@ def test_cycles_lobes_narrowed_draws_the_eevee_lobes_everywhere():
         h.expect(material.node_tree.get_output_node("CYCLES").inputs["Surface"].links[0].from_node == baked_node,
                  "Cycles does not draw the group")
 
-        bake.bake_material(material, bake.BakeSettings(max_lobes=4, cycles_lobes=nodes.WIDENED))
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=4, cycles_lobes=nodes.WIDENED))
+        h.expect("Cycles draws the lobes widened only" in result.summary, result.summary)
         tree = material.node_tree.nodes["ndfbake"].node_tree
         cycles, eevee = (_lobe_roughness_sources(tree, output) for output in ("BSDF", nodes.EEVEE_BSDF))
         h.expect(len(cycles) == len(eevee) == _principled_count(tree) and not set(cycles) & set(eevee),
@@ -1061,7 +1062,7 @@ def test_a_deleted_group_node_beside_a_renamed_one_is_baked_again():
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_blender_decodes_the_map_as_the_command_line_does, test_bake_adds_only_the_group_and_bypass, test_failure_while_building_nodes_rolls_back,
-           test_operators_rebake_fewer_lobes_and_revert, test_cycles_lobes_narrowed_draws_the_eevee_lobes_everywhere,
+           test_operators_rebake_fewer_lobes_and_revert, test_cycles_lobes_narrowed_or_widened,
            test_save_reopen_then_revert,
            test_bake_all_bakes_what_the_scene_renders, test_linked_inputs_are_carried_and_restored,
            test_a_user_graph_downstream_gets_no_eevee_output, test_pack_option, test_animated_inputs_keep_animating,

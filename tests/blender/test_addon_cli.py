@@ -59,13 +59,13 @@ def test_command_line_bake_and_revert():
         h.expect(sorted(os.listdir(directory)) == ["Good.ndfbake", "normal.png", "scene.blend", "scene.blend1",
                                                    "srgb.png"], sorted(os.listdir(directory)))
 
-        code, out = h.run_bake_blend(blend, "--material", "Good", "--max-lobes", "1", "--cycles-lobes", "narrowed")
+        code, out = h.run_bake_blend(blend, "--material", "Good", "--max-lobes", "1", "--cycles-lobes", "widened")
         h.expect(code == 0, "re-bake of Good: exit %d\n%s" % (code, out))
         h.expect("baked Good into //Good~2.ndfbake: 1 lobe," in out, out)
-        h.expect("Cycles draws the lobes narrowed at grazing views" in out, "--cycles-lobes narrowed not said:\n" + out)
+        h.expect("Cycles draws the lobes widened only" in out, "--cycles-lobes widened not said:\n" + out)
         reopen(blend)
-        h.expect(json.loads(bpy.data.materials["Good"][bake.RECORD_KEY])["settings"]["cycles_lobes"] == "NARROWED",
-                 "--cycles-lobes narrowed did not reach the bake")
+        h.expect(json.loads(bpy.data.materials["Good"][bake.RECORD_KEY])["settings"]["cycles_lobes"] == "WIDENED",
+                 "--cycles-lobes widened did not reach the bake")
         h.expect(os.path.isdir(os.path.join(directory, "Good.ndfbake")),
                  "the replaced folder, which the file saved by the first run used, was deleted")
 
