@@ -38,7 +38,7 @@ WIDENED, NARROWED = "WIDENED", "NARROWED"
 # fitted offline against the normal map's own response (docs/grazing-fit.md; brdf.h
 # kGrazingNarrowing, which ndfbake.glsl uses too), EEVEE's measured on the demo scene
 # (examples/world_sweep.py; docs/rendering.md, "Grazing views").
-GRAZING_NARROWING = {"BSDF": 4.0, EEVEE_BSDF: 8.0}
+GRAZING_NARROWING = {"BSDF": 4.0, EEVEE_BSDF: 32.0}
 # Principled inputs the lobe group computes itself rather than passing through.
 COMPUTED_INPUTS = {"Normal", "Roughness"}
 # Principled inputs the group draws once, beside the lobes, rather than in every lobe (_emission).
