@@ -48,8 +48,8 @@ the group is built with the narrowed lobes only and both outputs draw them: clos
 filtered reference in a converged Cycles render, noisier at low sample counts where a small
 bright light (an HDR's sun) glints in them (README, "Open problems": image error in Cycles).
 
-OSL: Debian's Blender is built without OSL (bpy.app.build_options.cycles_osl is False), so no OSL
-Script variant is offered; `osl_status()` says so. The stock-node group works in both engines.
+OSL: where Cycles runs OSL on the CPU, a bake may draw Cycles' lobes through one Script node
+instead (osl_group.py); `osl_status()` says where. The stock-node group works in both engines.
 """
 from dataclasses import dataclass, field
 
@@ -102,11 +102,11 @@ SPECULAR_LOBE_INPUTS = {specular_split.CONDUCTOR: _SHARED_LOBE_INPUTS | {"Base C
 BASE_SET_INPUTS = {"Base Color", "Metallic", "Specular IOR Level", "Alpha"}
 
 
-def osl_status():
-    """(available, message) for the OSL Script variant of the group."""
-    if getattr(bpy.app.build_options, "cycles_osl", False):
-        return True, "OSL is available in this Blender build, but ndfbake emits the stock-node group only"
-    return False, "this Blender build has no OSL (bpy.app.build_options.cycles_osl is False): stock-node group"
+def osl_status(scene=None):
+    """(available, message) for the OSL Script variant of the group (osl_group.py): in this build,
+    or with `scene` also with its Cycles settings."""
+    from . import osl_group  # imports this module
+    return osl_group.status(scene) if scene is not None else osl_group.build_status()
 
 
 # ---- shared helper groups ------------------------------------------------------------------------
