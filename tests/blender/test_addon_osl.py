@@ -14,6 +14,8 @@ Run: python tests/blender/test_addon_osl.py -- LIB   (the bpy module; or blender
   and a metal, in the sun's highlight off one facet (the plain normal map, bilinear between the
   facets, misses it). 64 times closer the OSL render resolves level 0's facets: the level is the
   renderer's.
+- The tangent frame: the shader's world normal of a lobe is the Normal Map node's, on a smooth
+  and a flat sphere, within 0.1 degrees.
 - The panel's conditions: not offered with OSL off or on the GPU (status says why), refused for a
   material with a coat; Revert removes the Script node's group and text and restores the material.
 Renders are 16² to 32², 4 samples.
@@ -163,10 +165,75 @@ def test_flat_texel_matches_the_stock_group():
         h.expect(contrast > 0.5, "close up, the OSL variant does not resolve level 0's facets: %s" % row)
 
 
+def test_lobe_normals_are_the_normal_map_nodes():
+    """The shader's tangent frame (ndfb_tangent_to_world) is the Normal Map node's, on a smooth
+    and a flat UV sphere: slot 0's world normal, from a copy of the shader with it as an output,
+    against the group's own Normal Map node of slot 0's decoded normal (its EEVEE path, the same
+    texel: a V-groove map is one texel at every level from 1 up, here about level 2), as emission,
+    one sample at each pixel's centre; within 0.1 degrees."""
+    from ndfbake import bake, osl_group
+    with h.scratch_dir() as directory:
+        h.reset_scene()
+        image_path = h.write_normal_map(os.path.join(directory, "vgroove.png"), "vgroove", 64)
+        material = h.normal_mapped_material("Groove Sphere", image_path, roughness=0.3, metallic=1.0)
+        bpy.ops.mesh.primitive_uv_sphere_add(segments=32, ring_count=16, radius=1.0)
+        sphere = bpy.context.active_object
+        for loop in sphere.data.uv_layers.active.data:
+            loop.uv = (loop.uv[0] * 8.0, loop.uv[1] * 4.0)
+        sphere.data.materials.append(material)
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "scene.blend"))
+        scene = bpy.context.scene
+        bpy.ops.object.camera_add(location=(0.0, -5.0, 0.0), rotation=(math.pi / 2, 0.0, 0.0))
+        camera = scene.camera = bpy.context.active_object
+        camera.data.type = "ORTHO"
+        camera.data.ortho_scale = 2.4
+        h.uniform_world(scene, "Black", (0.0, 0.0, 0.0))
+        h.configure_render(scene, 32, 32, cycles_samples=1)
+        scene.cycles.filter_width = 0.01
+        osl_scene(scene)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2, shader="OSL"))
+        group = next(n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeGroup").node_tree
+        script = osl_group.script_node(group)
+        source = open(osl_group.SHADER_FILE, encoding="utf-8").read()
+        source = source.replace("output closure color BSDF = 0)", "output closure color BSDF = 0, output normal N0 = 0)")
+        source = source.replace("    normal n = ndfb_tangent_to_world(mu, UVMapName, NormalStrength);",
+                                "    normal n = ndfb_tangent_to_world(mu, UVMapName, NormalStrength);\n"
+                                "    if (j == 0)\n      N0 = n;")
+        probe = bpy.data.texts.new("ndfbake probe.osl")
+        probe.write(source)
+        script.script = probe
+        ok, messages = osl_group.compile_script(script)
+        h.expect(ok and "N0" in script.outputs, "the probe does not compile: %s" % messages)
+        output = next(n for n in group.nodes if n.bl_idname == "NodeGroupOutput")
+        normal_map = group.nodes["Normal Map"]  # slot 0's, in the EEVEE lobes
+        h.expect(normal_map.bl_idname == "ShaderNodeNormalMap", normal_map.bl_idname)
+        stock = {}
+        for shading in ("smooth", "flat"):
+            for polygon in sphere.data.polygons:
+                polygon.use_smooth = shading == "smooth"
+            normals = []
+            for socket in (normal_map.outputs["Normal"], script.outputs["N0"]):
+                emission = group.nodes.new("ShaderNodeEmission")
+                group.links.new(socket, emission.inputs["Color"])
+                group.links.new(emission.outputs[0], output.inputs["BSDF"])
+                normals.append(h.render_pixels(scene, os.path.join(directory, "n.exr"))[..., :3])
+            a, b = normals
+            stock[shading] = a
+            inside = np.linalg.norm(a, axis=2) > 0.5
+            cosine = (a * b).sum(axis=2) / np.maximum(np.linalg.norm(a, axis=2) * np.linalg.norm(b, axis=2), 1e-9)
+            angles = np.degrees(np.arccos(np.clip(cosine[inside], -1.0, 1.0)))
+            print("  %s sphere: %d pixels, the two normals %.4f degrees apart at most" % (
+                shading, inside.sum(), angles.max()))
+            h.expect(inside.sum() > 300 and angles.max() < 0.1, "%s: normals %.3f degrees apart" % (
+                shading, angles.max()))
+        apart = float(np.abs(stock["smooth"] - stock["flat"]).max())
+        h.expect(apart > 0.05, "smooth and flat shading drew the same normals (%.4f apart)" % apart)
+
+
 if __name__ == "__main__":
     if not getattr(bpy.app.build_options, "cycles_osl", False):
         print("skipped: this Blender has no OSL (bpy.app.build_options.cycles_osl is False)")
         h.exit_now(0)
     h.import_addon()
     h.run([test_bake_compiles_renders_and_reverts, test_offered_only_where_cycles_runs_osl_on_the_cpu,
-           test_flat_texel_matches_the_stock_group])
+           test_flat_texel_matches_the_stock_group, test_lobe_normals_are_the_normal_map_nodes])
