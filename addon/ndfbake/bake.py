@@ -36,6 +36,10 @@ Files (choices the design leaves open):
   converged brightness within 10% of the reference under most of Blender's studio worlds) or
   widened only (WIDENED: the fewest fireflies at low sample counts under a small bright light,
   too bright or too dark at grazing views). docs/rendering.md ("Grazing views") has the figures.
+- Shader (BakeSettings.shader): "NODES" (default), the stock-node group; "OSL", where Cycles runs
+  OSL on the CPU (osl_group.status), the same group with Cycles' lobes drawn by one OSL Script node
+  that reads each slot's MIP-mapped file (native write option `mipmap`; every level is fitted, the
+  renderer picks them by its ray differentials); EEVEE draws the stock group's lobes. osl_group.py.
 """
 import json
 import os
@@ -46,7 +50,8 @@ from dataclasses import dataclass, field
 
 import bpy
 
-from . import group_node, id_names, image_pixels, lobe_folders, lod_nodes, material_scan, native, node_builders, nodes, scene_lod
+from . import (group_node, id_names, image_pixels, lobe_folders, lod_nodes, material_scan, native, node_builders, nodes,
+               osl_group, scene_lod)
 
 RECORD_KEY = material_scan.RECORD_KEY
 RECORD_VERSION = 1
@@ -65,6 +70,7 @@ class BakeSettings:
     pack: bool = False          # also pack the lobe textures into the .blend
     level_of_detail: str = "SCENE"  # "SCENE": atlases at a level from the camera; "RENDERER": level 0
     cycles_lobes: str = nodes.NARROWED  # what Cycles draws: lobes NARROWED toward grazing views, or WIDENED only
+    shader: str = "NODES"       # "NODES": the stock-node group; "OSL": Cycles' lobes through OSL (osl_group.py)
 
 
 class BakeError(Exception):
@@ -101,7 +107,8 @@ def settings_from_material(material):
     if props is None:
         return BakeSettings()
     return BakeSettings(max_lobes=props.max_lobes, tolerance=props.tolerance, refine=props.refine,
-                        pack=props.pack, level_of_detail=props.level_of_detail, cycles_lobes=props.cycles_lobes)
+                        pack=props.pack, level_of_detail=props.level_of_detail, cycles_lobes=props.cycles_lobes,
+                        shader=getattr(props, "shader", "NODES"))
 
 
 # ---- step 1: prepare ------------------------------------------------------------------------------
@@ -157,6 +164,22 @@ def prepare(material, settings=None):
     if settings.cycles_lobes not in (nodes.WIDENED, nodes.NARROWED):
         raise BakeError("BAD_SETTINGS", "Cycles lobes must be %s or %s, got %r" % (nodes.WIDENED, nodes.NARROWED,
                                                                                   settings.cycles_lobes))
+    if settings.shader not in ("NODES", "OSL"):
+        raise BakeError("BAD_SETTINGS", "shader must be NODES or OSL, got %r" % settings.shader)
+    if settings.shader == "OSL":
+        available, why = osl_group.status(bpy.context.scene)
+        if not available:
+            raise BakeError("OSL_UNAVAILABLE", "cannot bake '%s' for OSL: %s" % (material.name, why))
+        found = material_scan.recorded_targets(material.node_tree, material_scan.record(material) or {})
+        for target in scan.targets:
+            principled = material.node_tree.nodes[target.principled]
+            # A re-bake: the group node holds the Principled's inputs as the user edits them now.
+            holder = next((f.group_node for f in found if f.principled is not None
+                           and f.principled.name == principled.name and f.group_node is not None), principled)
+            unsupported = osl_group.unsupported_inputs(principled, holder)
+            if unsupported:
+                raise BakeError("OSL_UNSUPPORTED", "the OSL variant draws no %s (on '%s' of '%s'): bake it with "
+                                "the stock-node shader" % (", ".join(unsupported), principled.name, material.name))
     lod, lod_note = _plan_lod(material, scan, settings)
     try:
         pixels = image_pixels.read(scan.image)
@@ -262,7 +285,8 @@ class BakeJob:
                 ctx.bake(normal_map, self.out_dir, source_name=self.image_path, max_lobes=self.settings.max_lobes,
                          tolerance=self.settings.tolerance, roughness=self.roughness, wrap=self.wrap,
                          refine=self.settings.refine, threads=self.settings.threads, progress=callback,
-                         max_levels=self.lod.levels if self.lod else 0, atlas=self.lod is not None)
+                         max_levels=self.lod.levels if self.lod and self.settings.shader != "OSL" else 0,
+                         atlas=self.lod is not None, mipmap=self.settings.shader == "OSL")
         except native.Error as e:
             if not existed:
                 lobe_folders.delete_bake_files(self.out_dir, [])  # the empty folder, if the library left it
@@ -435,6 +459,8 @@ def finish(job):
     used = report.get("slots_used")
     paths = [p for j, p in enumerate(_lobe_textures(job.out_dir, job.lod is not None))
              if used is None or j >= len(used) or used[j]]
+    slots = [j for j, _ in enumerate(_lobe_textures(job.out_dir, job.lod is not None))
+             if used is None or j >= len(used) or used[j]]
     if not paths:
         raise BakeError("NATIVE_ERROR", "the bake wrote no lobe texture into %s" % job.out_dir)
     atlas = None
@@ -468,6 +494,12 @@ def finish(job):
         groups = []
         for principled_name, normal_map_name, texture_name in job.targets:
             current = replacing[principled_name].group_node if principled_name in replacing else None
+            if job.settings.shader == "OSL":
+                groups.append(osl_group.build_material_group(
+                    nodes.material_group_name(material.name), tree.nodes[principled_name],
+                    tree.nodes[normal_map_name], tree.nodes[texture_name], images, job.out_dir, slots, atlas,
+                    job.lod, current=current, cycles_lobes=job.settings.cycles_lobes))
+                continue
             groups.append(nodes.build_material_group(
                 nodes.material_group_name(material.name), tree.nodes[principled_name], tree.nodes[normal_map_name],
                 tree.nodes[texture_name], images, atlas, job.lod, current=current,
@@ -511,6 +543,7 @@ def finish(job):
     baked = {principled_name for principled_name, _, _ in job.targets}  # each replaced above
     _remove_nodes(material, {"targets": [found.target for name, found in replacing.items() if name not in baked]})
     nodes.remove_unused_groups(old_groups)
+    osl_group.remove_unused_text()
     _remove_images(old_images)
     _take_names(material, targets, images)
     created = [image.name for image in images]
@@ -521,6 +554,8 @@ def finish(job):
             job.lod.texels_per_unit, job.lod.footprint_max)
     else:
         summary += "; level 0 filtered by the renderer" + (" (%s)" % job.lod_note if job.lod_note else "")
+    if job.settings.shader == "OSL":
+        summary += "; Cycles draws the lobes through OSL, at the levels its ray differentials pick"
     if job.settings.cycles_lobes == nodes.WIDENED:
         summary += "; Cycles draws the lobes widened only (not narrowed at grazing views)"
     rec = {
@@ -533,7 +568,7 @@ def finish(job):
         "summary": summary,
         "settings": {"max_lobes": job.settings.max_lobes, "tolerance": job.settings.tolerance,
                      "refine": job.settings.refine, "roughness": job.roughness, "level_of_detail": "SCENE" if job.lod else "RENDERER",
-                     "cycles_lobes": job.settings.cycles_lobes},
+                     "cycles_lobes": job.settings.cycles_lobes, "shader": job.settings.shader},
     }
     material[RECORD_KEY] = json.dumps(rec)
     return BakeResult(material=material.name, folder=job.folder, lobes=len(images), seconds=job.seconds,
@@ -633,6 +668,7 @@ def revert(material):
                         % (material.name, material.library.filepath))
     folder = lobe_folders.record_folder(rec)
     _remove_nodes(material, rec)
+    osl_group.remove_unused_text()
     _remove_images(rec.get("images", []))
     del material[RECORD_KEY]
     return folder, [m.name for m in lobe_folders.folder_users(folder)] if folder else []

@@ -69,7 +69,7 @@ def _key(path):
 
 def is_bake_file(name):
     return name in ("report.json", "ndfbake.glsl") or re.fullmatch(
-        r"level\d+_(lobe|color)\d+\.exr|atlas_lobe\d+\.exr", name) is not None
+        r"level\d+_(lobe|color)\d+\.exr|(atlas|mip)_lobe\d+\.exr", name) is not None
 
 
 def record_folder(rec):

@@ -90,6 +90,7 @@ class WriteOptions(ctypes.Structure):
         ("color_path", ctypes.c_char_p),
         ("source_name", ctypes.c_char_p),
         ("atlas", ctypes.c_int32),
+        ("mipmap", ctypes.c_int32),
     ]
 
 
@@ -314,7 +315,8 @@ class Context:
         return NormalMap(self, handle)
 
     def bake(self, normal_map, out_dir, *, source_name=None, max_lobes=4, tolerance=0.0, roughness=0.5,
-             wrap=WRAP_REPEAT, refine=False, threads=0, progress=None, max_levels=0, atlas=False):
+             wrap=WRAP_REPEAT, refine=False, threads=0, progress=None, max_levels=0, atlas=False,
+             mipmap=False):
         """ndfb_bake_map with a GGX base BRDF of Blender roughness `roughness`; `source_name` is what
         the files and report.json record as the map's origin (None: the library's "memory").
 
@@ -343,6 +345,7 @@ class Context:
         name = _encode(source_name) if source_name else None  # kept alive by this frame for the call
         write.source_name = name
         write.atlas = 1 if atlas else 0
+        write.mipmap = 1 if mipmap else 0
         self.check(lib.ndfb_bake_map(self.handle, normal_map.handle, _encode(out_dir), ctypes.byref(fit),
                                      ctypes.byref(write)))
         del callback

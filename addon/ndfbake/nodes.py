@@ -21,7 +21,8 @@ target EEVEE that the bake adds beside the user's (group_node.add_eevee_output) 
 removes. Each output's lobes are narrowed toward grazing views with its engine's constant
 (GRAZING_NARROWING; lobe_nodes.grazing_roughness_group), Cycles' unless cycles_lobes is WIDENED.
 
-OSL: `osl_status()` says whether this Blender's Cycles has OSL; the group is stock nodes either way.
+OSL: where Cycles runs OSL on the CPU, a bake may draw Cycles' lobes through one Script node
+instead (osl_group.py); `osl_status()` says where. The stock-node group works in both engines.
 """
 import bpy
 
@@ -58,11 +59,11 @@ SPECULAR_LOBE_INPUTS = {specular_split.CONDUCTOR: _SHARED_LOBE_INPUTS | {"Base C
 BASE_SET_INPUTS = {"Base Color", "Metallic", "Specular IOR Level", "Alpha"}
 
 
-def osl_status():
-    """(available, message) for the OSL Script variant of the group."""
-    if getattr(bpy.app.build_options, "cycles_osl", False):
-        return True, "OSL is available in this Blender build, but ndfbake emits the stock-node group only"
-    return False, "this Blender build has no OSL (bpy.app.build_options.cycles_osl is False): stock-node group"
+def osl_status(scene=None):
+    """(available, message) for the OSL Script variant of the group (osl_group.py): in this build,
+    or with `scene` also with its Cycles settings."""
+    from . import osl_group  # imports this module
+    return osl_group.status(scene) if scene is not None else osl_group.build_status()
 
 
 def material_group_name(material_name):
@@ -107,7 +108,8 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     the renderer filters itself (atlas None), or MIP atlases (AtlasLayout) sampled at the level
     of detail the scene gives (lod: a scene_lod.LodPlan, required with an atlas). Each output's
     lobes are narrowed toward grazing views with its constant (GRAZING_NARROWING), BSDF's not
-    with cycles_lobes WIDENED. For a
+    with cycles_lobes WIDENED; with cycles_lobes None the BSDF output is left unlinked for the
+    caller (osl_group draws Cycles' lobes itself). For a
     re-bake, `current` is the group node of the bake it replaces, which holds the Principled's
     inputs (held_input)."""
     tree = _new_group(name)
@@ -152,7 +154,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     kind = specular_split.lobe_kind(holder) if specular_split.may_split(principled, holder) else None
 
     # The outputs whose lobe BSDFs the group builds: (y offset of a lobe's BSDF, y of the sum).
-    layout = {"BSDF": (0, -200), EEVEE_BSDF: (-450, -500)}
+    layout = ({"BSDF": (0, -200)} if cycles_lobes is not None else {}) | {EEVEE_BSDF: (-450, -500)}
     shaders, weights, moments = {output: [] for output in layout}, [], []
     for j, image in enumerate(lobe_images):
         y = -900 * j
@@ -196,7 +198,8 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
             total = _alpha_over(tree, gin, total, "%s %s" % (ALPHA_MIX, output), (x_end + 400, y))
         sums[output] = _add_shader(tree, total, emission, (x_end + 600, y))
     tree.links.new(sums[EEVEE_BSDF], gout.inputs[EEVEE_BSDF])
-    tree.links.new(sums["BSDF"], gout.inputs["BSDF"])
+    if "BSDF" in sums:
+        tree.links.new(sums["BSDF"], gout.inputs["BSDF"])
     return tree
 
 

@@ -32,6 +32,12 @@ class NDFBakeSettings(bpy.types.PropertyGroup):
                (nodes.WIDENED, "Widened", "Cycles draws each lobe widened by its spread only: the fewest fireflies "
                 "at low sample counts under a small bright light (an HDR's sun), too bright or too dark at "
                 "grazing views")))
+    shader: EnumProperty(
+        name="Cycles Shader", default="NODES",
+        items=(("NODES", "Nodes", "Stock shader nodes, in both engines"),
+               ("OSL", "OSL Script", "Cycles draws the lobes through one OSL Script node that reads a MIP-mapped "
+                "file per lobe slot: the renderer picks the level from its ray differentials (reflections, any "
+                "camera, instances). Cycles on the CPU with Open Shading Language on; EEVEE draws the nodes")))
 
 
 def _wrapped(layout, text, icon="NONE", width=60):
@@ -91,6 +97,9 @@ class NDFBAKE_PT_material(bpy.types.Panel):
         column.prop(settings, "refine")
         column.prop(settings, "level_of_detail")
         column.prop(settings, "cycles_lobes")
+        osl_available, osl_message = nodes.osl_status(context.scene)
+        if osl_available or settings.shader == "OSL":
+            column.prop(settings, "shader")
         column.prop(settings, "pack")
 
         baked = bake.is_baked(material)
@@ -113,7 +122,7 @@ class NDFBAKE_PT_material(bpy.types.Panel):
                                                            rec.get("summary", "")), icon="CHECKMARK")
             _wrapped(layout, "The ndfbake node now holds the material's inputs (colour, roughness, ...): edit "
                              "them there; the original Principled BSDF is kept, bypassed, for Revert.", icon="INFO")
-        _wrapped(layout, nodes.osl_status()[1], icon="INFO")
+        _wrapped(layout, osl_message, icon="INFO" if osl_available or settings.shader != "OSL" else "ERROR")
 
 
 classes = (NDFBakeSettings, NDFBAKE_PT_material)

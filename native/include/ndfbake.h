@@ -143,6 +143,16 @@ typedef struct ndfb_write_options {
        there, so bilinear filtering inside a level is exact. report.json's "atlas" gives the size
        and, per level, the frame's top-left corner (x, y; texels start at x + 1, y + 1) and size. */
     int32_t atlas;
+    /* Non-zero: also write mip_lobeJ.exr, lobe slot J as one tiled, MIP-mapped OpenEXR file
+       (MIPMAP_LEVELS, ROUND_UP, 64x64 tiles) whose MIP level L is fitted level L, for renderers
+       that pick and filter levels themselves (OpenImageIO's texture system: OSL's texture(), a
+       real-time engine's MIP chain). Level L is ceil(w / 2^L) x ceil(h / 2^L), the bake's own
+       sizes (ROUND_UP: OpenEXR's ROUND_DOWN would drop levels of a non-power-of-two map). The
+       chain always runs down to 1x1: where max_levels fitted fewer, the rest are footprint-weighted
+       averages of the level below (attribute ndfbake:fitted_levels says how many are fitted).
+       Channels and ndfbake:* attributes as the per-level files, with ndfbake:level -1 and the
+       per-level fit errors in ndfbake:level_errors. */
+    int32_t mipmap;
 } ndfb_write_options;
 
 typedef struct ndfb_repairs {
@@ -231,8 +241,8 @@ NDFB_API ndfb_status ndfb_texel_error(ndfb_context ctx, ndfb_normal_map map, ndf
                                       float* error);
 
 /* ---- files --------------------------------------------------------------------------------- */
-/* Writes level{L}_lobe{j}.exr for every level and lobe slot, optional level{L}_color{j}.exr, and
- * report.json into out_dir, each atomically (temp name, then rename). On failure or cancel, no
+/* Writes level{L}_lobe{j}.exr for every level and lobe slot, optional level{L}_color{j}.exr,
+ * atlas_lobe{j}.exr and mip_lobe{j}.exr (write options atlas, mipmap), and report.json into out_dir, each atomically (temp name, then rename). On failure or cancel, no
  * file of this call remains. The files and the report record the options the pyramid was fitted
  * with; of fit_options only the progress callback and threads are used. */
 NDFB_API ndfb_status ndfb_pyramid_write(ndfb_context ctx, ndfb_pyramid pyramid, ndfb_normal_map map,
@@ -400,8 +410,9 @@ NDFB_API ndfb_status ndfb_tangent_to_object(ndfb_context ctx, const ndfb_mesh* m
 /* pattern: "vgroove", "bumps", "fbm", "brushed", "scratches", "weave". Tileable, deterministic. */
 NDFB_API ndfb_status ndfb_synthesize(ndfb_context ctx, const char* pattern, uint32_t width, uint32_t height,
                                      uint32_t seed, ndfb_normal_map* out);
-/* A readable description of any image file: format, size, channels, pixel type and every header
- * attribute (ndfbake's own among them), one per line. Copies at most capacity bytes including the
+/* A readable description of any image file: format, size, channels, pixel type, its MIP levels
+ * and their sizes where it has more than one, the lobe slot of an ndfbake lobe file, and every
+ * header attribute (ndfbake's own among them), one per line. Copies at most capacity bytes including the
  * terminating NUL; *length (if not NULL) receives the full length without it. */
 NDFB_API ndfb_status ndfb_describe_image(ndfb_context ctx, const char* path, char* text, size_t capacity,
                                          size_t* length);

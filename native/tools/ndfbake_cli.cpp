@@ -44,6 +44,8 @@ bake options:
   --levels N           fit and write levels 0..N-1 only (default 0: every level down to 1x1)
   --atlas              also write atlas_lobeJ.exr: every level of lobe slot J in one image
                        (for renderers without MIP levels; layout in report.json)
+  --mipmap             also write mip_lobeJ.exr: lobe slot J as one tiled MIP-mapped EXR whose
+                       levels are the fitted levels (OpenImageIO's texture system, OSL, engines)
   --method M           hierarchical (default: every level from the binned normals of the level
                        below) or per-level (every level from all its fine normals: Han's
                        reference, 4-5x slower)
@@ -87,7 +89,8 @@ struct Args {
 
 bool is_flag(const std::string& name)
 {
-    return name == "--no-align" || name == "--quiet" || name == "--atlas" || name == "--refine";
+    return name == "--no-align" || name == "--quiet" || name == "--atlas" || name == "--refine" ||
+           name == "--mipmap";
 }
 
 bool parse_args(int argc, char** argv, int first, Args& args, std::string& error)
@@ -244,6 +247,7 @@ int run_bake(ndfb_context ctx, const Args& args)
         else if (name == "--refine") fit.refine = 1;
         else if (name == "--quiet") progress.quiet = true;
         else if (name == "--atlas") write.atlas = 1;
+        else if (name == "--mipmap") write.mipmap = 1;
         else return fail(1, "bad option " + name + (value.empty() ? "" : " " + value) + " (see --help)");
     }
     if (out_dir.empty()) return fail(1, "bake needs --out DIR");

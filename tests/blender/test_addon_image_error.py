@@ -17,9 +17,9 @@ normal maps synthesized by the library, the interior HDR, 8 lobes), built at 128
   also for the whole image and the near ground (held to regression bounds). The references are
   checked first: the far ground of the EEVEE reference must be brighter than the naive render
   (the bumps' steep slopes catch the ceiling light, which MIP-averaged normals lose), and the
-  naive render must be measurably off. Then Cycles Lobes: re-baked Narrowed, a converged Cycles
-  render (128 spp) must bring the far ground's mean luminance closer to the reference's than
-  the default Widened does.
+  naive render must be measurably off. Then Cycles Lobes: a converged Cycles render (128 spp) of
+  the default, Narrowed, must bring the far ground's mean luminance closer to the reference's
+  than a re-bake with Widened does, and within CONVERGED_BRIGHTNESS_BOUND of it.
 - test_command_line_bake_changes_only_the_baked_materials: examples/bake_blend.py bakes the saved
   demo .blend in a separate `blender -b`; in the saved file the five rendered normal-mapped
   materials are baked and every other datablock (the plain and the unrendered materials, the
@@ -69,6 +69,11 @@ EEVEE_NEXT_REGRESSION_BOUNDS = {"ground_far": 6.5, "spheres_far": 1.3, "all": 1.
 REGRESSION_BOUNDS = {("eevee", "all"): 0.7, ("cycles", "all"): 0.5, ("cycles", "ground_near"): 0.5}
 MIN_WINDOWS = 40                          # 4x4 windows a region needs for its figure to mean anything
 CONVERGED_SAMPLES = 128                   # Cycles Lobes compared where noise no longer decides
+# Issue 24's goal is the far ground's converged brightness within 10% of the reference's under 6 of
+# Blender's 8 studio worlds (examples/world_sweep.py; docs/rendering.md, "Grazing views"); under
+# this world it measured 0.90 (Blender 5.0, 2026-11-28; Widened 1.56), so it is held to a margin
+# over that. Blender 3.4: 1.39 before the narrowing had its own constant.
+CONVERGED_BRIGHTNESS_BOUND = 0.12 if bpy.app.version >= (4, 2, 0) else 0.45
 
 
 def test_image_error_against_references():
@@ -139,16 +144,15 @@ def test_image_error_against_references():
                     failures.append("%s on %s: ratio %.3f > %.2f" % (what, region, ratio, bound))
         h.expect(not failures, "over the bound: " + "; ".join(failures))
 
-        # Cycles Lobes: Narrowed is for converged renders, where the widened lobes' bias at grazing
-        # views shows (too bright under a high light, too dark under a low one) and their lower
-        # noise no longer counts: the far ground's mean luminance must come closer to the
-        # reference's with it (2026-11-26: 1.80x widened, 1.39x narrowed at 128 spp).
-        converged = {"widened": demo_scene.render(scene, "CYCLES", os.path.join(renders, "widened.exr"),
-                                                  CONVERGED_SAMPLES, seed=5)}
-        rebakes = demo_scene.bake_all(scene, max_lobes=MAX_LOBES, cycles_lobes=nodes.NARROWED)
-        h.expect(all("error" not in b for b in rebakes), "a Narrowed re-bake failed: %s" % rebakes)
-        converged["narrowed"] = demo_scene.render(scene, "CYCLES", os.path.join(renders, "narrowed.exr"),
-                                                  CONVERGED_SAMPLES, seed=5)
+        # Cycles Lobes: the widened lobes' bias at grazing views shows in converged renders (too
+        # bright under a high light, too dark under a low one), which the narrowing corrects: the far
+        # ground's mean luminance must come closer to the reference's with it.
+        converged = {"narrowed": demo_scene.render(scene, "CYCLES", os.path.join(renders, "narrowed.exr"),
+                                                   CONVERGED_SAMPLES, seed=5)}
+        rebakes = demo_scene.bake_all(scene, max_lobes=MAX_LOBES, cycles_lobes=nodes.WIDENED)
+        h.expect(all("error" not in b for b in rebakes), "a Widened re-bake failed: %s" % rebakes)
+        converged["widened"] = demo_scene.render(scene, "CYCLES", os.path.join(renders, "widened.exr"),
+                                                 CONVERGED_SAMPLES, seed=5)
         errors = image_error.compare(converged, images["cycles_reference"], {r: masks[r] for r in REGIONS})
         off = {}
         for region, entry in errors.items():
@@ -160,6 +164,9 @@ def test_image_error_against_references():
         h.expect(off["narrowed", "ground_far"] < off["widened", "ground_far"],
                  "Cycles Lobes Narrowed is no closer to the reference's far-ground brightness (%.3f off) than "
                  "Widened (%.3f off)" % (off["narrowed", "ground_far"], off["widened", "ground_far"]))
+        h.expect(off["narrowed", "ground_far"] < CONVERGED_BRIGHTNESS_BOUND,
+                 "Cycles' converged far ground is %.3f off the reference's brightness (bound %.2f)"
+                 % (off["narrowed", "ground_far"], CONVERGED_BRIGHTNESS_BOUND))
 
 
 # ---- the command-line bake --------------------------------------------------------------------

@@ -33,6 +33,8 @@ import test_addon_helpers as h  # noqa: E402
 
 ADDON_SOURCE = os.path.join(h.REPO, "addon", "ndfbake")
 MODULES = {n for n in os.listdir(ADDON_SOURCE) if n.endswith(".py")}
+# The OSL variant's shader source (osl_group.py).
+MODULES |= {"osl/" + n for n in os.listdir(os.path.join(ADDON_SOURCE, "osl")) if n.endswith(".osl")}
 # The library's bundled dependencies (OpenEXR's): shared objects beside it, found through $ORIGIN.
 BUNDLED_LIBRARY = re.compile(r"lib[A-Za-z0-9_+-]+(-[0-9_]+)?\.so(\.[0-9]+)*$")
 TEST_REPOSITORY = "ndfbake_test"  # the module name of the temporary extension repository

@@ -159,6 +159,64 @@ void write_atlas(const LobePyramid& pyramid, const DecodeResult& decoded, const 
     write_rgba_exr(path, layout.width, layout.height, atlas.data(), write.precision, attributes);
 }
 
+// Level `level` + 1 of a slot's texture from level `level` (w × h, RGBA): each texel the mean of
+// the texels below it (two by two, fewer at an odd edge) weighted by their footprints, which
+// averages their distributions as the linear encoding does under hardware filtering. For the
+// levels of a MIP file beyond the fitted ones (--levels N): an estimate, not a fit.
+std::vector<float> averaged_coarser_level(const std::vector<float>& rgba, const NormalMap& source, int level,
+                                          WrapMode wrap)
+{
+    const LevelSize fine = level_size(source.width, source.height, level);
+    const LevelSize coarse = level_size(source.width, source.height, level + 1);
+    std::vector<float> out(size_t(coarse.width) * size_t(coarse.height) * 4, 0.0f);
+    for (int y = 0; y < coarse.height; ++y)
+        for (int x = 0; x < coarse.width; ++x) {
+            double sum[4] = {0, 0, 0, 0}, weight = 0;
+            for (int cy = 2 * y; cy < std::min(2 * y + 2, fine.height); ++cy)
+                for (int cx = 2 * x; cx < std::min(2 * x + 2, fine.width); ++cx) {
+                    const double w = footprint_weight(source.width, source.height, level, cx, cy, wrap);
+                    const float* texel = &rgba[(size_t(cy) * size_t(fine.width) + size_t(cx)) * 4];
+                    for (int c = 0; c < 4; ++c) sum[c] += w * double(texel[c]);
+                    weight += w;
+                }
+            for (int c = 0; c < 4; ++c)
+                out[(size_t(y) * size_t(coarse.width) + size_t(x)) * 4 + size_t(c)] =
+                    weight > 0 ? float(sum[c] / weight) : 0.0f;
+        }
+    return out;
+}
+
+// Lobe slot `lobe` as one MIP-mapped file (write option `mipmap`, see ndfbake.h): its levels are
+// the fitted levels, then (if fewer were fitted than the chain has) averaged ones down to 1×1.
+void write_mip_file(const LobePyramid& pyramid, const DecodeResult& decoded, const PyramidSettings& settings,
+                    const WriteSettings& write, const std::vector<LevelStats>& stats, int lobe,
+                    const std::string& path)
+{
+    const int chain = mip_level_count(pyramid.source.width, pyramid.source.height);
+    std::vector<std::vector<float>> textures;
+    for (int level = 0; level < chain; ++level)
+        textures.push_back(level < pyramid.level_count()
+                               ? lobe_texture(pyramid, level, lobe)
+                               : averaged_coarser_level(textures.back(), pyramid.source, level - 1, settings.wrap));
+    std::vector<RgbaLevel> levels;
+    std::string errors;
+    for (int level = 0; level < chain; ++level) {
+        const LevelSize size = level_size(pyramid.source.width, pyramid.source.height, level);
+        levels.push_back({size.width, size.height, textures[size_t(level)].data()});
+        if (level < pyramid.level_count())
+            errors += (errors.empty() ? "" : ";") + std::to_string(stats[size_t(level)].fit.mean);
+    }
+    std::vector<ExrAttribute> attributes = file_attributes(
+        pyramid, decoded, settings, write, -1, lobe, -1.0f,
+        "mip-mapped vmf lobe slot: R = alpha, GBA = alpha * r; MIP level L is fitted level L (the first "
+        "ndfbake:fitted_levels; the rest averaged)");
+    attributes.push_back({"ndfbake:mip_levels", chain});
+    attributes.push_back({"ndfbake:fitted_levels", pyramid.level_count()});
+    attributes.push_back({"ndfbake:mip_rounding", std::string("up: level L is ceil(w / 2^L) x ceil(h / 2^L)")});
+    attributes.push_back({"ndfbake:level_errors", errors});
+    write_mip_rgba_exr(path, levels, write.precision, attributes);
+}
+
 void write_summary(JsonWriter& json, const char* key, const ErrorSummary& summary)
 {
     json.begin_object(key).value("mean", summary.mean).value("p95", summary.p95).end_object();
@@ -275,6 +333,13 @@ std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded,
             json.begin_object().value("x", l.x).value("y", l.y).value("width", l.width).value("height", l.height).end_object();
         json.end_array().end_object();
     }
+    if (write.mipmap)
+        json.begin_object("mipmap")
+            .value("levels", mip_level_count(pyramid.source.width, pyramid.source.height))
+            .value("fitted_levels", pyramid.level_count())
+            .value("rounding", "up: level L is ceil(w / 2^L) x ceil(h / 2^L), as the fitted levels")
+            .value("tile", kMipTileSize)
+            .end_object();
     json.begin_array("files");
     for (const std::string& f : files) json.value(nullptr, fs::path(f).filename().string());
     json.value(nullptr, "report.json");
@@ -285,7 +350,7 @@ std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded,
 
 bool is_bake_file(const std::string& name)
 {
-    static const std::regex pattern(R"(level\d+_(lobe|color)\d+\.exr|atlas_lobe\d+\.exr)");
+    static const std::regex pattern(R"(level\d+_(lobe|color)\d+\.exr|(atlas|mip)_lobe\d+\.exr)");
     return name == kLobeShaderFileName || std::regex_match(name, pattern);
 }
 
@@ -338,6 +403,13 @@ std::string atlas_file_name(int lobe)
     return buffer;
 }
 
+std::string mip_file_name(int lobe)
+{
+    char buffer[48];
+    std::snprintf(buffer, sizeof buffer, "mip_lobe%d.exr", lobe);
+    return buffer;
+}
+
 std::string color_file_name(int level, int lobe)
 {
     char buffer[48];
@@ -372,16 +444,23 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
     try {
         // One job per file, on every core: compressing the level-0 textures is most of the cost.
         // Jobs [0, lobe_jobs) are the (level, slot) textures, level 0 first so that the largest
-        // files start together; the rest one atlas per slot.
+        // files start together; then one atlas per slot, then one MIP file per slot.
         std::vector<std::string> names;
         for (int level = 0; level < pyramid.level_count(); ++level)
             for (int lobe = 0; lobe < pyramid.slots; ++lobe) names.push_back(lobe_file_name(level, lobe));
         const int lobe_jobs = int(names.size());
         if (write.atlas)
             for (int lobe = 0; lobe < pyramid.slots; ++lobe) names.push_back(atlas_file_name(lobe));
+        const int atlas_jobs = int(names.size()) - lobe_jobs;
+        if (write.mipmap)
+            for (int lobe = 0; lobe < pyramid.slots; ++lobe) names.push_back(mip_file_name(lobe));
         const AtlasLayout layout = pyramid_atlas_layout(pyramid);
         parallel_rows(int(names.size()), settings.threads, [&](int job) {
             const std::string path = (staging / names[size_t(job)]).string();
+            if (job >= lobe_jobs + atlas_jobs) {
+                write_mip_file(pyramid, decoded, settings, write, stats, job - lobe_jobs - atlas_jobs, path);
+                return;
+            }
             if (job >= lobe_jobs) {
                 write_atlas(pyramid, decoded, settings, write, layout, job - lobe_jobs, path);
                 return;

@@ -32,6 +32,8 @@ std::vector<float> lobe_texture(const LobePyramid& pyramid, int level, int slot)
 // Lobe texture file name for a level and slot: "level03_lobe1.exr".
 std::string lobe_file_name(int level, int lobe);
 std::string color_file_name(int level, int lobe);
+// The MIP-mapped file of a slot (write option mipmap): "mip_lobe1.exr".
+std::string mip_file_name(int lobe);
 
 // Writes the pyramid's files into out_dir. Everything goes to a staging folder inside out_dir
 // first and is renamed into place only once all of it is written, so a failure or a cancel leaves

@@ -79,7 +79,8 @@ MemoryEstimate estimate_bake_memory(int width, int height, const SourceLayout& s
     e.fit = normals + pyramid + working;
     // Files are written on every thread at once (bake.cpp), each holding one texture in float
     // and as converted for the file (at most float again): level 0 is the largest.
-    const uint64_t writers = std::min<uint64_t>(threads, slots * uint64_t(levels) + (write.atlas ? slots : 0));
+    const uint64_t writers = std::min<uint64_t>(
+        threads, slots * uint64_t(levels) + (write.atlas ? slots : 0) + (write.mipmap ? slots : 0));
     uint64_t writing = writers * pixels * 4 * sizeof(float) * 2;
     // Colour: every slot's level-0 texture at once, the colour image twice and its decoded pixels.
     if (!write.color_path.empty())
@@ -92,6 +93,10 @@ MemoryEstimate estimate_bake_memory(int width, int height, const SourceLayout& s
         writing = std::max(writing, writers * (uint64_t(atlas.width) * uint64_t(atlas.height) * 4 * sizeof(float) * 2 +
                                                pixels * 4 * sizeof(float)));
     }
+    if (write.mipmap)
+        // Each writer: every level of one slot in float (under 4/3 of level 0) and one level as
+        // converted for the file.
+        writing = std::max(writing, writers * (pixels * 4 * sizeof(float) * 4 / 3 + pixels * 4 * sizeof(float)));
     e.write = normals + pyramid + writing;
     return e;
 }

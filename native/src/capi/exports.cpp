@@ -38,7 +38,7 @@ thread_local std::string g_create_error;
 
 // What each option struct held when ABI 1 first shipped (require_struct_size): ndfb_decode_options
 // has never grown; ndfb_fit_options ended at progress_user (max_memory_bytes, max_levels, starts
-// and refine came later), ndfb_write_options at source_name (atlas came later).
+// and refine came later), ndfb_write_options at source_name (atlas and mipmap came later).
 constexpr size_t kDecodeOptionsFirstSize = sizeof(ndfb_decode_options);
 constexpr size_t kFitOptionsFirstSize = NDFB_SIZE_THROUGH(ndfb_fit_options, progress_user);
 constexpr size_t kWriteOptionsFirstSize = NDFB_SIZE_THROUGH(ndfb_write_options, source_name);
@@ -128,6 +128,7 @@ WriteSettings to_write(const ndfb_write_options* o)
     if (o->color_path) w.color_path = o->color_path;
     if (o->source_name) w.source_name = o->source_name;
     if (o->struct_size >= NDFB_SIZE_THROUGH(ndfb_write_options, atlas)) w.atlas = o->atlas != 0;
+    if (o->struct_size >= NDFB_SIZE_THROUGH(ndfb_write_options, mipmap)) w.mipmap = o->mipmap != 0;
     return w;
 }
 
@@ -506,6 +507,25 @@ NDFB_API ndfb_status ndfb_describe_image(ndfb_context ctx, const char* path, cha
         std::string s = "file: " + std::string(path) + "\nformat: " + info.format + "\nsize: " +
                         std::to_string(info.width) + "x" + std::to_string(info.height) + "\nchannels: " +
                         std::to_string(info.channels) + "\npixel type: " + info.pixel_type + "\n";
+        if (info.tile_width > 0)
+            s += "tiles: " + std::to_string(info.tile_width) + "x" + std::to_string(info.tile_height) + "\n";
+        if (info.mip_levels.size() > 1) {
+            s += "MIP levels: " + std::to_string(info.mip_levels.size()) + "\n";
+            for (size_t level = 0; level < info.mip_levels.size(); ++level)
+                s += "  level " + std::to_string(level) + ": " + std::to_string(info.mip_levels[level].first) + "x" +
+                     std::to_string(info.mip_levels[level].second) + "\n";
+        }
+        std::string lobe, slots, fitted;
+        for (const auto& [name, value] : info.attributes) {
+            if (name == "ndfbake:lobe") lobe = value;
+            if (name == "ndfbake:lobe_slots") slots = value;
+            if (name == "ndfbake:fitted_levels") fitted = value;
+        }
+        if (!lobe.empty() && !slots.empty()) s += "lobe slot: " + lobe + " of " + slots + " (0-based)\n";
+        if (!fitted.empty() && info.mip_levels.size() > 1)
+            s += "fitted levels: " + fitted + " of " + std::to_string(info.mip_levels.size()) +
+                 (std::to_string(info.mip_levels.size()) == fitted ? "" : " (the rest averaged from the last fitted)") +
+                 "\n";
         for (const auto& [name, value] : info.attributes) s += name + ": " + value + "\n";
         if (length) *length = s.size();
         if (capacity > 0) {

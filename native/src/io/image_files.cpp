@@ -20,8 +20,12 @@ ImageInfo read_image_info(const std::string& path)
     info.height = spec.height;
     info.channels = spec.nchannels;
     info.pixel_type = spec.format.c_str();
+    info.tile_width = spec.tile_width;
+    info.tile_height = spec.tile_height;
     for (const OIIO::ParamValue& param : spec.extra_attribs)
         info.attributes.emplace_back(param.name().string(), param.get_string());
+    for (int level = 0; in->seek_subimage(0, level); ++level)
+        info.mip_levels.emplace_back(in->spec().width, in->spec().height);
     return info;
 }
 

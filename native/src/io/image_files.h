@@ -34,6 +34,8 @@ struct ImageInfo {
     int channels = 0;
     std::string pixel_type;  // OpenImageIO type name: "half", "float", "uint8", ...
     std::vector<std::pair<std::string, std::string>> attributes;  // every header attribute
+    std::vector<std::pair<int, int>> mip_levels;  // width, height of every MIP level (level 0 first)
+    int tile_width = 0, tile_height = 0;          // 0: scanlines
 };
 
 // The header of any image OpenImageIO reads; errors as in decode_normal_map.

@@ -1,6 +1,7 @@
 #include "io/lobe_exr.h"
 
 #include <cerrno>
+#include <algorithm>
 #include <cstring>
 #include <type_traits>
 
@@ -95,16 +96,22 @@ void set_attribute(exr_context_t context, int part, const ExrAttribute& attribut
         attribute.value);
 }
 
-// The header: one scanline part, R, G, B, A of one sample type, the given compression and attributes.
+// The header: one part, R, G, B, A of one sample type, the given compression and attributes;
+// scanlines, or (tiled) MIP-mapped tiles of kMipTileSize², levels rounded up.
 int write_header(exr_context_t context, int width, int height, exr_pixel_type_t type,
-                 const std::vector<ExrAttribute>& attributes, ExrCompression compression, const std::string& path)
+                 const std::vector<ExrAttribute>& attributes, ExrCompression compression, const std::string& path,
+                 bool tiled = false)
 {
     int part = 0;
-    check(exr_add_part(context, nullptr, EXR_STORAGE_SCANLINE, &part), path);
+    check(exr_add_part(context, nullptr, tiled ? EXR_STORAGE_TILED : EXR_STORAGE_SCANLINE, &part), path);
     const bool rle = compression == ExrCompression::run_length;
     check(exr_initialize_required_attr_simple(context, part, width, height,
                                               rle ? EXR_COMPRESSION_RLE : EXR_COMPRESSION_ZIP),
           path);
+    if (tiled)
+        check(exr_set_tile_descriptor(context, part, kMipTileSize, kMipTileSize, EXR_TILE_MIPMAP_LEVELS,
+                                      EXR_TILE_ROUND_UP),
+              path);
     if (!rle) check(exr_set_zip_compression_level(context, part, kZlibLevel), path);
     for (const char* channel : {"R", "G", "B", "A"})
         check(exr_add_channel(context, part, channel, type, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1), path);
@@ -113,6 +120,57 @@ int write_header(exr_context_t context, int width, int height, exr_pixel_type_t 
     return part;
 }
 
+// One encoder for every chunk of a part: initialized on the first, updated for the next, and
+// always destroyed.
+class ChunkEncoder {
+public:
+    ChunkEncoder(exr_context_t context, int part, const std::string& path)
+        : context_(context), part_(part), path_(path) {}
+    ChunkEncoder(const ChunkEncoder&) = delete;
+    ChunkEncoder& operator=(const ChunkEncoder&) = delete;
+    ~ChunkEncoder()
+    {
+        if (started_) exr_encoding_destroy(context_, &encoder_);
+    }
+
+    // Encodes and writes `chunk`, whose top-left texel is `origin` in an interleaved RGBA image of
+    // type T with `line_samples` samples per row.
+    template <typename T>
+    void run(const exr_chunk_info_t& chunk, exr_pixel_type_t type, const T* origin, size_t line_samples)
+    {
+        if (started_) {
+            check(exr_encoding_update(context_, part_, &chunk, &encoder_), path_);
+        } else {
+            check(exr_encoding_initialize(context_, part_, &chunk, &encoder_), path_);
+            started_ = true;
+        }
+        // The file stores the channels sorted by name (A, B, G, R): each reads its own offset.
+        for (int c = 0; c < encoder_.channel_count; ++c) {
+            exr_coding_channel_info_t& channel = encoder_.channels[c];
+            static constexpr char kInterleaved[] = "RGBA";
+            const auto offset = std::strchr(kInterleaved, channel.channel_name[0]) - kInterleaved;
+            channel.encode_from_ptr = reinterpret_cast<const uint8_t*>(origin + offset);
+            channel.user_pixel_stride = int32_t(4 * sizeof(T));
+            channel.user_line_stride = int32_t(line_samples * sizeof(T));
+            channel.user_bytes_per_element = int16_t(sizeof(T));
+            channel.user_data_type = uint16_t(type);
+        }
+        if (!routines_chosen_) {
+            check(exr_encoding_choose_default_routines(context_, part_, &encoder_), path_);
+            routines_chosen_ = true;
+        }
+        check(exr_encoding_run(context_, part_, &encoder_), path_);
+    }
+
+private:
+    exr_context_t context_;
+    int part_;
+    const std::string& path_;
+    exr_encode_pipeline_t encoder_{};
+    bool started_ = false;
+    bool routines_chosen_ = false;
+};
+
 // Encodes interleaved RGBA samples of type T (width * 4 per row, top row first), chunk by chunk.
 template <typename T>
 void write_scanlines(exr_context_t context, int part, int width, int height, exr_pixel_type_t type,
@@ -120,39 +178,33 @@ void write_scanlines(exr_context_t context, int part, int width, int height, exr
 {
     int32_t lines_per_chunk = 0;
     check(exr_get_scanlines_per_chunk(context, part, &lines_per_chunk), path);
-    exr_encode_pipeline_t encoder{};
-    bool started = false;
-    const auto destroy = [&] { if (started) exr_encoding_destroy(context, &encoder); };
-    try {
-        for (int y = 0; y < height; y += lines_per_chunk) {
-            exr_chunk_info_t chunk{};
-            check(exr_write_scanline_chunk_info(context, part, y, &chunk), path);
-            if (started) {
-                check(exr_encoding_update(context, part, &chunk, &encoder), path);
-            } else {
-                check(exr_encoding_initialize(context, part, &chunk, &encoder), path);
-                started = true;
-            }
-            // The file stores the channels sorted by name (A, B, G, R): each reads its own offset.
-            for (int c = 0; c < encoder.channel_count; ++c) {
-                exr_coding_channel_info_t& channel = encoder.channels[c];
-                static constexpr char kInterleaved[] = "RGBA";
-                const auto offset = std::strchr(kInterleaved, channel.channel_name[0]) - kInterleaved;
-                channel.encode_from_ptr =
-                    reinterpret_cast<const uint8_t*>(rgba + (size_t(chunk.start_y) * size_t(width)) * 4 + size_t(offset));
-                channel.user_pixel_stride = int32_t(4 * sizeof(T));
-                channel.user_line_stride = int32_t(size_t(width) * 4 * sizeof(T));
-                channel.user_bytes_per_element = int16_t(sizeof(T));
-                channel.user_data_type = uint16_t(type);
-            }
-            if (y == 0) check(exr_encoding_choose_default_routines(context, part, &encoder), path);
-            check(exr_encoding_run(context, part, &encoder), path);
-        }
-    } catch (...) {
-        destroy();
-        throw;
+    ChunkEncoder encoder(context, part, path);
+    for (int y = 0; y < height; y += lines_per_chunk) {
+        exr_chunk_info_t chunk{};
+        check(exr_write_scanline_chunk_info(context, part, y, &chunk), path);
+        encoder.run(chunk, type, rgba + size_t(chunk.start_y) * size_t(width) * 4, size_t(width) * 4);
     }
-    destroy();
+}
+
+// Encodes level `level` (interleaved RGBA samples of type T, top row first) tile by tile.
+template <typename T>
+void write_level_tiles(exr_context_t context, int part, int level, int width, int height, exr_pixel_type_t type,
+                       const T* rgba, ChunkEncoder& encoder, const std::string& path)
+{
+    const int tiles_x = (width + kMipTileSize - 1) / kMipTileSize, tiles_y = (height + kMipTileSize - 1) / kMipTileSize;
+    for (int ty = 0; ty < tiles_y; ++ty)
+        for (int tx = 0; tx < tiles_x; ++tx) {
+            exr_chunk_info_t chunk{};
+            check(exr_write_tile_chunk_info(context, part, tx, ty, level, level, &chunk), path);
+            // OpenEXRCore 3.1 clips a level's last tiles against level 0's size, not the level's
+            // (a 100-texel level 1 of a 200-texel map would get a second tile 64 wide, not 36):
+            // the tile's size and bytes are set here from the level's own size.
+            chunk.width = std::min(kMipTileSize, width - tx * kMipTileSize);
+            chunk.height = std::min(kMipTileSize, height - ty * kMipTileSize);
+            chunk.unpacked_size = uint64_t(chunk.width) * uint64_t(chunk.height) * 4 * sizeof(T);
+            const size_t x0 = size_t(tx) * kMipTileSize, y0 = size_t(ty) * kMipTileSize;
+            encoder.run(chunk, type, rgba + (y0 * size_t(width) + x0) * 4, size_t(width) * 4);
+        }
 }
 
 }  // namespace
@@ -177,6 +229,65 @@ void write_rgba_exr(const std::string& path, int width, int height, const float*
             write_scanlines(writer.get(), part, width, height, type, halves.data(), path);
         else
             write_scanlines(writer.get(), part, width, height, type, rgba, path);
+        writer.finish();
+    });
+}
+
+int mip_level_count(int width, int height)
+{
+    int levels = 1;
+    while ((int64_t(1) << (levels - 1)) < std::max(width, height)) ++levels;
+    return levels;
+}
+
+int mip_level_extent(int extent, int level)
+{
+    const int64_t span = int64_t(1) << level;
+    return int(std::max<int64_t>(1, (extent + span - 1) / span));
+}
+
+void write_mip_rgba_exr(const std::string& path, std::span<const RgbaLevel> levels, PixelPrecision precision,
+                        const std::vector<ExrAttribute>& attributes, ExrCompression compression)
+{
+    const auto refuse = [&](const std::string& why) {
+        throw Error(Status::invalid_argument, "cannot write '" + path + "': " + why);
+    };
+    if (levels.empty() || levels[0].width <= 0 || levels[0].height <= 0) refuse("no pixels");
+    const int width = levels[0].width, height = levels[0].height;
+    if (int(levels.size()) != mip_level_count(width, height))
+        refuse(std::to_string(levels.size()) + " levels, a " + std::to_string(width) + " x " +
+               std::to_string(height) + " MIP chain has " + std::to_string(mip_level_count(width, height)));
+    for (size_t level = 0; level < levels.size(); ++level) {
+        const int w = mip_level_extent(width, int(level)), h = mip_level_extent(height, int(level));
+        if (levels[level].width != w || levels[level].height != h || !levels[level].rgba)
+            refuse("level " + std::to_string(level) + " is " + std::to_string(levels[level].width) + " x " +
+                   std::to_string(levels[level].height) + ", expected " + std::to_string(w) + " x " +
+                   std::to_string(h));
+    }
+    const exr_pixel_type_t type = precision == PixelPrecision::half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
+    write_file_atomic(path, [&](const std::string& temp_path) {
+        ExrWriter writer(temp_path, path);
+        const int part = write_header(writer.get(), width, height, type, attributes, compression, path, true);
+        int32_t levels_x = 0, levels_y = 0;
+        check(exr_get_tile_levels(writer.get(), part, &levels_x, &levels_y), path);
+        if (levels_x != int(levels.size()) || levels_y != int(levels.size()))
+            throw Error(Status::internal, "cannot write '" + path + "': OpenEXR lays out " + std::to_string(levels_x) +
+                                              " levels, the chain has " + std::to_string(levels.size()));
+        {
+            // Destroyed before finish(), which releases the context the encoder refers to.
+            ChunkEncoder encoder(writer.get(), part, path);
+            std::vector<Imath::half> halves;
+            for (size_t level = 0; level < levels.size(); ++level) {
+                const RgbaLevel& l = levels[level];
+                if (precision == PixelPrecision::half) {
+                    // Rounded here (to nearest, as OpenImageIO and Imath do) and stored as they are.
+                    halves.assign(l.rgba, l.rgba + size_t(l.width) * size_t(l.height) * 4);
+                    write_level_tiles(writer.get(), part, int(level), l.width, l.height, type, halves.data(), encoder, path);
+                } else {
+                    write_level_tiles(writer.get(), part, int(level), l.width, l.height, type, l.rgba, encoder, path);
+                }
+            }
+        }
         writer.finish();
     });
 }
