@@ -2,12 +2,15 @@
 
     blender -b --factory-startup --python examples/frame_time.py -- --out DIR
             [--width W --height H] [--eevee-samples N] [--samples N] [--lobes 1,4,8] [--repeats R]
+            [--dielectric]
     python examples/frame_time.py -- --out DIR ...        (Blender as the bpy module)
 
 Builds examples/demo_scene.py's scene (five normal-mapped metal materials), renders it plain (the
 materials as the artist made them), then bakes it with 1, 4 and 8 lobes at most and renders it
 again. Every variant is rendered once to warm up (EEVEE compiles its shaders, Cycles its kernels
-and the scene; that time is printed apart) and then timed over R renders, the fastest kept. Prints
+and the scene; that time is printed apart) and then timed over R renders, the fastest kept.
+--dielectric sets every material's Metallic to 0 first (plain and baked alike), where a bake
+draws the diffuse once beneath specular-only lobes (addon/ndfbake/specular_split.py). Prints
 a table of seconds per frame and the ratio to plain, per engine, and writes DIR/frame_time.json.
 """
 import argparse
@@ -36,12 +39,15 @@ def time_renders(scene, engine, samples, directory, repeats):
     return first, best
 
 
-def measure(out, width, height, eevee_samples, samples, lobe_counts, repeats, log=print):
+def measure(out, width, height, eevee_samples, samples, lobe_counts, repeats, dielectric=False, log=print):
     scene_dir = os.path.join(out, "scene")
     os.makedirs(scene_dir, exist_ok=True)
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene_info = demo_scene.build_scene(scene_dir, width, height)
     scene = bpy.context.scene
+    if dielectric:
+        for name in scene_info["materials"]:
+            bpy.data.materials[name].node_tree.nodes["Principled BSDF"].inputs["Metallic"].default_value = 0.0
     engines = {"EEVEE": demo_scene.eevee_engine(), "Cycles": "CYCLES"}
     rows = []
 
@@ -65,7 +71,8 @@ def measure(out, width, height, eevee_samples, samples, lobe_counts, repeats, lo
     plain = {r["engine"]: r["seconds"] for r in rows if r["variant"] == "plain"}
     for r in rows:
         r["ratio"] = round(r["seconds"] / plain[r["engine"]], 2)
-    report = {"blender": bpy.app.version_string, "width": width, "height": height, "rows": rows}
+    report = {"blender": bpy.app.version_string, "width": width, "height": height, "dielectric": dielectric,
+              "rows": rows}
     with open(os.path.join(out, "frame_time.json"), "w") as f:
         json.dump(report, f, indent=1)
     log("\n| engine | variant | samples | seconds a frame | ratio to plain | first render (s) |")
@@ -86,6 +93,7 @@ def _arguments():
     parser.add_argument("--samples", type=int, default=16, help="Cycles samples per pixel")
     parser.add_argument("--lobes", default="1,4,8", help="comma-separated maximum lobe counts to bake")
     parser.add_argument("--repeats", type=int, default=2, help="timed renders per variant (fastest kept)")
+    parser.add_argument("--dielectric", action="store_true", help="the materials with Metallic 0 (plain and baked)")
     parser.add_argument("--library", help="libndfbake.so (default $NDFBAKE_LIBRARY or build/native/libndfbake.so)")
     return parser.parse_args(argv)
 
@@ -94,7 +102,7 @@ def main():
     args = _arguments()
     demo_scene.import_addon(args.library)
     measure(args.out, args.width, args.height, args.eevee_samples, args.samples,
-            [int(n) for n in args.lobes.split(",")], args.repeats)
+            [int(n) for n in args.lobes.split(",")], args.repeats, args.dielectric)
     return 0
 
 
