@@ -380,6 +380,19 @@ def uniform_world(scene, name, color):
     return world
 
 
+def sun_lit_scene(size, cycles_samples, eevee_samples=None):
+    """The current scene with a camera looking down at the origin's plane from 2.6 m, a sun and a dim
+    uniform world, rendering size² pixels (configure_render)."""
+    scene = bpy.context.scene
+    bpy.ops.object.camera_add(location=(0.0, -2.6, 1.6), rotation=(1.05, 0.0, 0.0))
+    scene.camera = bpy.context.active_object
+    bpy.ops.object.light_add(type="SUN", rotation=(0.6, 0.3, 0.4))
+    bpy.context.active_object.data.energy = 4.0
+    uniform_world(scene, "World", (0.05, 0.05, 0.05))
+    configure_render(scene, size, size, cycles_samples=cycles_samples, eevee_samples=eevee_samples)
+    return scene
+
+
 def configure_render(scene, width, height, cycles_samples, eevee_samples=None):
     """What every test render shares: `width` x `height` at 100%, a linear EXR through the Standard
     view transform, Cycles on the CPU with `cycles_samples` and no denoising (Debian's Blender has

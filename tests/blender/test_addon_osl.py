@@ -41,13 +41,7 @@ def test_bake_compiles_renders_and_reverts():
     from ndfbake import bake, osl_group
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="bumps", size=64, roughness=0.35, metallic=0.3)
-        scene = bpy.context.scene
-        bpy.ops.object.camera_add(location=(0.0, -2.6, 1.6), rotation=(1.05, 0.0, 0.0))
-        scene.camera = bpy.context.active_object
-        bpy.ops.object.light_add(type="SUN", rotation=(0.6, 0.3, 0.4))
-        bpy.context.active_object.data.energy = 4.0
-        h.uniform_world(scene, "World", (0.05, 0.05, 0.05))
-        h.configure_render(scene, 32, 32, cycles_samples=4)
+        scene = h.sun_lit_scene(32, cycles_samples=4)
         osl_scene(scene)
         before, data_before = h.dump_material(material), h.data_counts()
         texts_before = sorted(t.name for t in bpy.data.texts)

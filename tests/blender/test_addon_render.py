@@ -28,14 +28,7 @@ SIZE = 64
 
 
 def setup_scene():
-    scene = bpy.context.scene
-    bpy.ops.object.camera_add(location=(0.0, -2.6, 1.6), rotation=(1.05, 0.0, 0.0))
-    scene.camera = bpy.context.active_object
-    bpy.ops.object.light_add(type="SUN", rotation=(0.6, 0.3, 0.4))
-    bpy.context.active_object.data.energy = 4.0
-    h.uniform_world(scene, "World", (0.05, 0.05, 0.05))
-    h.configure_render(scene, SIZE, SIZE, cycles_samples=4, eevee_samples=4)
-    return scene
+    return h.sun_lit_scene(SIZE, cycles_samples=4, eevee_samples=4)
 
 
 def render(scene, engine, path):
