@@ -32,6 +32,8 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import demo_scene  # noqa: E402
+import demo_build  # noqa: E402
+import demo_render  # noqa: E402
 import image_error  # noqa: E402
 
 SEEDS = (0, 2, 3)
@@ -114,21 +116,21 @@ def use_variant(scene, variant, max_lobes):
 
 
 def study(out, world, sun_lamp, reference_samples, converged_samples, variants, width, height, max_lobes):
-    info = demo_scene.build_scene(out, width, height, world=world)
+    info = demo_build.build_scene(out, width, height, world=world)
     scene = bpy.context.scene
     lamp = split_sun(scene) if sun_lamp else None
     if sun_lamp:
         print("sun lamp: %s" % (lamp or "none (no compact sun in %s)" % world), flush=True)
-    masks = demo_scene.region_masks(scene, info["ground"], info["far_spheres"])
+    masks = demo_render.region_masks(scene, info["ground"], info["far_spheres"])
     path = os.path.join(out, "render.exr")
-    reference = demo_scene.render(scene, "CYCLES", path, reference_samples, seed=1)
+    reference = demo_render.render(scene, "CYCLES", path, reference_samples, seed=1)
     rows = []
 
     regions = {region: masks[region] for region in REGIONS}
 
     def measure(name):
-        fast = {"seed %d" % s: demo_scene.render(scene, "CYCLES", path, 16, seed=s) for s in SEEDS}
-        converged = demo_scene.render(scene, "CYCLES", path, converged_samples, seed=7)
+        fast = {"seed %d" % s: demo_render.render(scene, "CYCLES", path, 16, seed=s) for s in SEEDS}
+        converged = demo_render.render(scene, "CYCLES", path, converged_samples, seed=7)
         to_reference = image_error.compare(dict(fast, converged=converged), reference, regions)
         to_converged = image_error.compare(fast, converged, regions)
         for region in REGIONS:
@@ -163,7 +165,7 @@ def main():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(prog="cycles_noise_study.py")
     parser.add_argument("--out", required=True)
-    parser.add_argument("--world", default=demo_scene.DEFAULT_WORLD, choices=demo_scene.world_names())
+    parser.add_argument("--world", default=demo_build.DEFAULT_WORLD, choices=demo_build.world_names())
     parser.add_argument("--sun-lamp", action="store_true")
     parser.add_argument("--reference-samples", type=int, default=512)
     parser.add_argument("--converged-samples", type=int, default=256)
@@ -180,7 +182,7 @@ def main():
         parser.error("unknown variants: %s" % ", ".join(unknown))
     os.makedirs(args.out, exist_ok=True)
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    demo_scene.import_addon(args.library)
+    demo_build.import_addon(args.library)
     study(os.path.abspath(args.out), args.world, args.sun_lamp, args.reference_samples, args.converged_samples,
           variants, args.width, args.height, args.max_lobes)
 

@@ -23,18 +23,20 @@ import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import demo_scene  # noqa: E402
+import demo_build  # noqa: E402
+import demo_render  # noqa: E402
 
 
 def time_renders(scene, engine, samples, directory, repeats):
     """(first render's seconds, fastest of `repeats` renders after it)."""
     path = os.path.join(directory, "frame.exr")
     start = time.perf_counter()
-    demo_scene.render(scene, engine, path, samples)
+    demo_render.render(scene, engine, path, samples)
     first = time.perf_counter() - start
     best = float("inf")
     for _ in range(repeats):
         start = time.perf_counter()
-        demo_scene.render(scene, engine, path, samples)
+        demo_render.render(scene, engine, path, samples)
         best = min(best, time.perf_counter() - start)
     return first, best
 
@@ -43,12 +45,12 @@ def measure(out, width, height, eevee_samples, samples, lobe_counts, repeats, di
     scene_dir = os.path.join(out, "scene")
     os.makedirs(scene_dir, exist_ok=True)
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene_info = demo_scene.build_scene(scene_dir, width, height)
+    scene_info = demo_build.build_scene(scene_dir, width, height)
     scene = bpy.context.scene
     if dielectric:
         for name in scene_info["materials"]:
             bpy.data.materials[name].node_tree.nodes["Principled BSDF"].inputs["Metallic"].default_value = 0.0
-    engines = {"EEVEE": demo_scene.eevee_engine(), "Cycles": "CYCLES"}
+    engines = {"EEVEE": demo_build.eevee_engine(), "Cycles": "CYCLES"}
     rows = []
 
     def run(variant):
@@ -100,7 +102,7 @@ def _arguments():
 
 def main():
     args = _arguments()
-    demo_scene.import_addon(args.library)
+    demo_build.import_addon(args.library)
     measure(args.out, args.width, args.height, args.eevee_samples, args.samples,
             [int(n) for n in args.lobes.split(",")], args.repeats, args.dielectric)
     return 0

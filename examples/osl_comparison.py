@@ -34,6 +34,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 if HERE not in sys.path:
     sys.path.insert(0, HERE)
 import demo_scene  # noqa: E402
+import demo_build  # noqa: E402
+import demo_render  # noqa: E402
 import image_error  # noqa: E402
 
 REGIONS = ("ground_far", "spheres_far", "all")
@@ -56,20 +58,20 @@ def run(out, width, height, reference_samples, samples, log=print):
     out = os.path.abspath(out)
     os.makedirs(out, exist_ok=True)
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    demo_scene.import_addon()
+    demo_build.import_addon()
     from ndfbake import lobe_folders
     lobe_folders.delete_folders([os.path.join(out, n) for n in sorted(os.listdir(out))
                                  if n.endswith(lobe_folders.FOLDER_SUFFIX)])
-    info = demo_scene.build_scene(out, width, height)
+    info = demo_build.build_scene(out, width, height)
     scene = bpy.context.scene
     scene.cycles.shading_system = True
-    masks = demo_scene.region_masks(scene, info["ground"], info["far_spheres"])
+    masks = demo_render.region_masks(scene, info["ground"], info["far_spheres"])
     renders = os.path.join(out, "renders")
     os.makedirs(renders, exist_ok=True)
 
     def render(name, n, seed):
         start = time.perf_counter()
-        pixels = demo_scene.render(scene, "CYCLES", os.path.join(renders, "%s-%d.exr" % (name, seed)), n, seed=seed)
+        pixels = demo_render.render(scene, "CYCLES", os.path.join(renders, "%s-%d.exr" % (name, seed)), n, seed=seed)
         return pixels, time.perf_counter() - start
 
     # The reference with OSL off: with it on, Cycles reads an image file's texture through
@@ -126,7 +128,7 @@ def run(out, width, height, reference_samples, samples, log=print):
 
 def main():
     args = _arguments()
-    demo_scene.import_addon(args.library)
+    demo_build.import_addon(args.library)
     return run(args.out, args.width, args.height, args.reference_samples, args.samples)
 
 

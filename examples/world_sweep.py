@@ -7,7 +7,7 @@ ground converges against its reference, and ndfbake's image error against naive'
     blender -b --factory-startup --python examples/world_sweep.py -- --out DIR ...
 
 For each world: builds examples/demo_scene.py's scene, renders its references and the naive map
-once (demo_scene.render_plain), bakes every material with the defaults an artist gets (demo_scene's
+once (demo_render.render_plain), bakes every material with the defaults an artist gets (demo_scene's
 8 lobes) and renders ndfbake; Cycles' far ground is also rendered at --converged-samples for its
 converged brightness (its 16-spp image error counts noise too). Writes DIR/<world>/ (renders,
 report.json) and DIR/world_sweep.json, and prints the table docs/rendering.md ("Grazing views")
@@ -31,6 +31,8 @@ import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import demo_scene  # noqa: E402
+import demo_build  # noqa: E402
+import demo_render  # noqa: E402
 import image_error  # noqa: E402
 
 BRIGHTNESS_GOAL = 0.10      # the far ground's converged mean luminance within 10% of the reference's
@@ -42,14 +44,14 @@ def sweep_world(out, world, width, height, samples, eevee_samples, converged_sam
     """One world: {variant: {engine: {"brightness": far-ground mean over the reference's,
     "naive_brightness", "ratio": {region: ndfbake / naive}}}}."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    demo_scene.import_addon()
+    demo_build.import_addon()
     os.makedirs(out, exist_ok=True)
-    scene_info = demo_scene.build_scene(out, width, height, world=world)
+    scene_info = demo_build.build_scene(out, width, height, world=world)
     scene = bpy.context.scene
     renders = os.path.join(out, "renders")
-    masks = demo_scene.region_masks(scene, scene_info["ground"], scene_info["far_spheres"])
-    images, info = demo_scene.render_plain(scene, renders, scene_info["materials"], samples=samples,
-                                           eevee_samples=eevee_samples, log=log)
+    masks = demo_render.region_masks(scene, scene_info["ground"], scene_info["far_spheres"])
+    images, info = demo_render.render_plain(scene, renders, scene_info["materials"], samples=samples,
+                                            eevee_samples=eevee_samples, log=log)
     results = {}
     for name, narrowing in variants.items():
         results[name] = _measure_variant(scene, renders, masks, dict(images), narrowing, samples, eevee_samples,
@@ -76,11 +78,11 @@ def _measure_variant(scene, renders, masks, images, narrowing, samples, eevee_sa
     failed = [b for b in bakes if "summary" not in b]
     if failed:
         raise RuntimeError("bakes failed: %s" % failed)
-    baked, _ = demo_scene.render_baked(scene, renders, samples, eevee_samples, log)
+    baked, _ = demo_render.render_baked(scene, renders, samples, eevee_samples, log)
     images.update(baked)
-    converged = demo_scene.render(scene, "CYCLES", os.path.join(renders, "cycles_ndfbake_converged.exr"),
-                                  converged_samples, seed=2)
-    errors = demo_scene.measure(images, masks)
+    converged = demo_render.render(scene, "CYCLES", os.path.join(renders, "cycles_ndfbake_converged.exr"),
+                                   converged_samples, seed=2)
+    errors = demo_render.measure(images, masks)
     far = masks["ground_far"]
     result = {}
     for engine, table in errors.items():
@@ -118,7 +120,7 @@ def main():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(prog="examples/world_sweep.py --")
     parser.add_argument("--out", required=True)
-    parser.add_argument("--worlds", default=",".join(demo_scene.world_names()))
+    parser.add_argument("--worlds", default=",".join(demo_build.world_names()))
     parser.add_argument("--width", type=int, default=128)
     parser.add_argument("--height", type=int, default=72)
     parser.add_argument("--samples", type=int, default=16, help="Cycles samples of the naive and ndfbake renders")

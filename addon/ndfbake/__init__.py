@@ -10,8 +10,9 @@ for want of the library: the panel then shows why it cannot be used.
 Modules: native (ctypes), image_pixels (the normal map as Blender decodes it), blender_compat (what
 differs between Blender versions), material_scan (finds the normal map), scene_lod (what the scene's
 cameras need), nodes (node groups), lobe_folders (where the textures go, and when they are
-deleted), bake (the work), operators and ui (thin skins). Scripts call bake.py, or the operators
-bpy.ops.ndfbake.bake / bake_all / revert; examples/bake_blend.py is a command line.
+deleted), bake (the work: bake_job its native step, bake_revert its revert), operators and ui
+(thin skins). Scripts call bake.py, or the operators bpy.ops.ndfbake.bake / bake_all / revert;
+examples/bake_blend.py is a command line.
 """
 
 bl_info = {
@@ -29,13 +30,14 @@ if "bpy" in locals():
     import importlib
     for _module in (blender_compat, native, image_pixels, node_animation, material_scan, scene_lod,  # noqa: F821
                     node_builders, specular_split, lobe_nodes, lod_nodes, nodes, group_node, lobe_folders,  # noqa: F821
-                    bake, operators, ui):  # noqa: F821
+                    bake_job, bake_revert, bake, operators, ui):  # noqa: F821
         importlib.reload(_module)
 
 import bpy  # noqa: E402
 
-from . import (bake, blender_compat, group_node, image_pixels, lobe_folders, lobe_nodes, lod_nodes,  # noqa: E402,F401
-               material_scan, native, node_animation, node_builders, nodes, operators, scene_lod, specular_split, ui)
+from . import (bake, bake_job, bake_revert, blender_compat, group_node, image_pixels,  # noqa: E402,F401
+               lobe_folders, lobe_nodes, lod_nodes, material_scan, native, node_animation, node_builders, nodes,
+               operators, scene_lod, specular_split, ui)
 
 
 def register():

@@ -10,6 +10,13 @@ A bake has three steps, so that the UI can run the slow one on a worker thread:
 the Principled BSDF's links come back, the group node, node groups and lobe images go; the lobe
 files stay for Ctrl-Z (when they go: lobe_folders.py).
 
+This module owns steps 1 and 3, whole bakes (bake_material, bake_materials) and the public names
+(BakeSettings, BakeResult, BakeError, RECORD_KEY, revert). Step 2 is bake_job.py (BakeJob,
+commit_pending, discard_pending: no bpy there); revert() and the removal of a bake's nodes and
+images are bake_revert.py. May call: bake_job, bake_revert and the Blender-data and plain layers
+below (group_node, nodes, osl_group, lod_nodes, node_builders, scene_lod, lobe_folders,
+material_scan, image_pixels, native, id_names); never operators or ui.
+
 Files (choices the design leaves open):
 - The lobe textures go into a new folder beside the .blend named after the material,
   `//<material>.ndfbake/` (`~2`, `~3`… while earlier bakes' folders exist), and images refer to
@@ -44,21 +51,17 @@ Files (choices the design leaves open):
 import json
 import os
 import re
-import threading
-import time
 from dataclasses import dataclass, field
 
 import bpy
 
-from . import (group_node, id_names, image_pixels, lobe_folders, lod_nodes, material_scan, native, node_builders, nodes,
-               osl_group, scene_lod)
+from . import (bake_job, bake_revert, group_node, id_names, image_pixels, lobe_folders, lod_nodes, material_scan,
+               native, node_builders, nodes, osl_group, scene_lod)
+from .bake_job import BakeError  # bake.BakeError: what every caller catches
 
 RECORD_KEY = material_scan.RECORD_KEY
+revert = bake_revert.revert  # bake.revert: Revert (bake_revert.py)
 RECORD_VERSION = 1
-
-# Weights of the library's progress stages in the overall fraction (each reports 0..1); Blender
-# decodes the map in prepare(), before the job starts.
-_STAGES = (("fit", 0.62), ("measure", 0.30), ("write", 0.08))
 
 
 @dataclass
@@ -71,15 +74,6 @@ class BakeSettings:
     level_of_detail: str = "SCENE"  # "SCENE": atlases at a level from the camera; "RENDERER": level 0
     cycles_lobes: str = nodes.NARROWED  # what Cycles draws: lobes NARROWED toward grazing views, or WIDENED only
     shader: str = "NODES"       # "NODES": the stock-node group; "OSL": Cycles' lobes through OSL (osl_group.py)
-
-
-class BakeError(Exception):
-    """A bake or revert that did not happen. `code` is stable (tests, scripts); str() is for people."""
-
-    def __init__(self, code, message):
-        super().__init__(message)
-        self.code = code
-        self.message = message
 
 
 @dataclass
@@ -147,7 +141,7 @@ def prepare(material, settings=None):
     """Checks the material and the library; returns a BakeJob or raises BakeError. Changes nothing.
     The native bake writes into a sibling folder '<lobe folder>.pending' that finish() moves into
     place once it has checked the material, so that a bake (or several, bake_all) can fail or be
-    cancelled before any file changes; discard_pending() throws one away."""
+    cancelled before any file changes; bake_job.discard_pending() throws one away."""
     settings = settings or BakeSettings()
     lib, message = native.status()
     if lib is None:
@@ -193,159 +187,16 @@ def prepare(material, settings=None):
     if not absolute:
         raise BakeError("UNSAVED_BLEND", "save the .blend first: the lobe textures of '%s' are written beside it"
                         % material.name)
-    return BakeJob(material_name=material.name, material_pointer=material.as_pointer(),
-                   image_path=scan.image_path, pixels=pixels, folder=relative,
-                   out_dir=absolute + lobe_folders.PENDING_SUFFIX, final_dir=absolute,
-                   wrap=_native_wrap(scan),
-                   roughness=min(max(scan.roughness, 0.01), 1.0), settings=settings,
-                   targets=_target_names(scan),
-                   lod=lod, lod_note=lod_note)
+    return bake_job.BakeJob(material_name=material.name, material_pointer=material.as_pointer(),
+                            image_path=scan.image_path, pixels=pixels, folder=relative,
+                            out_dir=absolute + lobe_folders.PENDING_SUFFIX, final_dir=absolute,
+                            wrap=_native_wrap(scan),
+                            roughness=min(max(scan.roughness, 0.01), 1.0), settings=settings,
+                            targets=_target_names(scan),
+                            lod=lod, lod_note=lod_note)
 
 
-
-# ---- step 2: the native bake (thread-safe: no bpy) ---------------------------------------------
-
-class BakeJob:
-    """The native part of a bake. run() works on any thread; start()/cancel()/done/progress let
-    a modal operator drive it from Blender's main thread."""
-
-    def __init__(self, material_name, image_path, pixels, folder, out_dir, final_dir, wrap, roughness, settings,
-                 targets, lod=None, lod_note="", material_pointer=0):
-        self.material_name = material_name
-        self.material_pointer = material_pointer  # Material.as_pointer() when prepared: follows a rename
-        self.image_path = image_path  # the normal map's file: what the lobe files record as their source
-        self.pixels = pixels          # image_pixels.Pixels: the map as Blender decoded it
-        self.folder = folder
-        self.out_dir = out_dir   # where the library writes: the pending folder, final_dir once committed
-        self.final_dir = final_dir
-        self.wrap = wrap
-        self.roughness = roughness
-        self.settings = settings
-        self.targets = targets
-        self.lod = lod           # scene_lod.LodPlan, or None: level 0 filtered by the renderer
-        self.lod_note = lod_note  # why not the scene's level of detail, where it was asked for
-        self.stage = ""
-        self.fraction = 0.0
-        self.seconds = 0.0
-        self.error = None        # BakeError after a failed run
-        self._cancel = threading.Event()
-        self._thread = None
-        self._done = threading.Event()
-
-    # Overall fraction from the library's (stage, fraction-of-stage).
-    def _overall(self, stage, fraction):
-        start = 0.0
-        for name, weight in _STAGES:
-            if name == stage:
-                return min(1.0, start + weight * max(0.0, min(1.0, fraction)))
-            start += weight
-        return self.fraction
-
-    def cancel(self):
-        self._cancel.set()
-
-    @property
-    def cancelled(self):
-        return self._cancel.is_set()
-
-    @property
-    def done(self):
-        return self._done.is_set()
-
-    def run(self, progress=None):
-        """The native bake. progress(stage, overall_fraction) may return True to cancel.
-        Raises BakeError; a folder this bake created is removed again on failure."""
-        try:
-            self._run(progress)
-        except BakeError as e:
-            self.error = e
-            raise
-        finally:
-            self._done.set()
-
-    def _run(self, progress):
-        lib, message = native.status()
-        if lib is None:
-            raise BakeError("NO_LIBRARY", message)
-        existed = os.path.isdir(self.out_dir)
-
-        def callback(stage, fraction):
-            self.stage = stage
-            self.fraction = self._overall(stage, fraction)
-            if progress is not None and progress(stage, self.fraction):
-                self._cancel.set()
-            return self._cancel.is_set()
-
-        start = time.perf_counter()
-        try:
-            if self._cancel.is_set():
-                raise native.Error(native.ERROR_CANCELLED, "NDFB_ERROR_CANCELLED", "cancelled before it started")
-            p = self.pixels
-            with lib.context() as ctx, ctx.normal_map(p.data, p.width, p.height, p.channels, p.signed) as normal_map:
-                ctx.bake(normal_map, self.out_dir, source_name=self.image_path, max_lobes=self.settings.max_lobes,
-                         tolerance=self.settings.tolerance, roughness=self.roughness, wrap=self.wrap,
-                         refine=self.settings.refine, threads=self.settings.threads, progress=callback,
-                         max_levels=self.lod.levels if self.lod and self.settings.shader != "OSL" else 0,
-                         atlas=self.lod is not None, mipmap=self.settings.shader == "OSL")
-        except native.Error as e:
-            if not existed:
-                lobe_folders.delete_bake_files(self.out_dir, [])  # the empty folder, if the library left it
-            raise _bake_error(e, self) from None
-        finally:
-            self.seconds = time.perf_counter() - start
-            self.pixels = None  # the decoded map can be large; finish() does not need it
-
-    def start(self):
-        """Runs the native bake on a worker thread; poll `done`, then call finish() on the main thread."""
-        def work():
-            try:
-                self.run()
-            except BakeError:
-                pass  # kept in self.error
-            except Exception as e:  # never lose a failure on the worker thread
-                self.error = BakeError("INTERNAL", "bake of '%s' failed: %s" % (self.material_name, e))
-                self._done.set()
-        self._thread = threading.Thread(target=work, name="ndfbake-" + self.material_name, daemon=True)
-        self._thread.start()
-
-    def join(self, timeout=None):
-        if self._thread is not None:
-            self._thread.join(timeout)
-
-
-def _bake_error(error, job):
-    name = job.material_name
-    if error.status == native.ERROR_CANCELLED:
-        return BakeError("CANCELLED", "bake of '%s' cancelled: no file and no node changed" % name)
-    if error.status == native.ERROR_IO:
-        return BakeError("OUTPUT_NOT_WRITABLE", "cannot write the lobe folder %s: %s" % (job.final_dir, error.message))
-    if error.status == native.ERROR_OUT_OF_MEMORY:
-        return BakeError("TOO_LARGE", error.message)
-    return BakeError("NATIVE_ERROR", "%s (%s)" % (error.message, error.status_name))
-
-
-def _commit_pending(job):
-    """Renames a pending job's folder into its lobe folder (new: lobe_folders.new_folder)."""
-    if job.out_dir == job.final_dir:
-        return
-    try:
-        os.rename(job.out_dir, job.final_dir)
-    except OSError as e:
-        raise BakeError("OUTPUT_NOT_WRITABLE", "cannot move the lobe textures of '%s' into %s: %s"
-                        % (job.material_name, job.final_dir, e.strerror)) from None
-    job.out_dir = job.final_dir
-    lobe_folders.created(job.final_dir)
-    lobe_folders.filled(job.folder)
-    lobe_folders.release(job.final_dir)
-
-
-def discard_pending(job):
-    """Deletes what a pending job wrote (nothing else: only its own files in its own folder) and
-    gives its folder name back."""
-    if job.out_dir != job.final_dir and os.path.isdir(job.out_dir):
-        lobe_folders.delete_bake_files(job.out_dir, os.listdir(job.out_dir))
-    lobe_folders.release(job.final_dir)
-
+# ---- step 2: the native bake on any thread, no bpy: bake_job.py ----------------------------------
 
 # ---- step 3: finish (main thread) ----------------------------------------------------------------
 
@@ -453,7 +304,7 @@ def finish(job):
         raise BakeError("MATERIAL_GONE", "material '%s' went away during the bake" % job.material_name)
     _check_unchanged(material, job)
     tree = material.node_tree
-    _commit_pending(job)
+    bake_job.commit_pending(job)
     report = _read_report(job.out_dir)
     # The cheapest group that does: slots no texel uses (a tolerance left them empty) are all zero.
     used = report.get("slots_used")
@@ -480,7 +331,7 @@ def finish(job):
         else:
             gone.append(found.target)
     if gone:  # group nodes the user deleted: their Principled BSDFs get their links back first
-        _remove_nodes(material, {"targets": gone})
+        bake_revert.remove_nodes(material, {"targets": gone})
     # By name: removing a dropped target's nodes below may remove one of these first; the new ones
     # are given other names while these exist.
     old_groups = [name for name in (t.get("node_group", "") for t in old.get("targets", []))
@@ -529,9 +380,9 @@ def finish(job):
         # files), so that the material is as it was before it, a previous bake included; say so.
         for _, replacement in reversed(replacements):
             group_node.undo_replacement(tree, replacement)
-        _remove_nodes(material, {"targets": inserted}, keep_edits=False)
+        bake_revert.remove_nodes(material, {"targets": inserted}, keep_edits=False)
         nodes.remove_unused_groups([name for name in bpy.data.node_groups.keys() if name not in groups_before])
-        _remove_images(created)
+        bake_revert.remove_images(created)
         lobe_folders.delete_bake_files(job.out_dir, os.listdir(job.out_dir))
         raise BakeError("INTERNAL", "building the node group of '%s' failed (%s: %s); the material is as it was "
                         "before this bake" % (material.name, type(e).__name__, e)) from e
@@ -541,10 +392,11 @@ def finish(job):
     for target, replacement in replacements:
         target["group_node"] = group_node.commit_replacement(tree, replacement).name
     baked = {principled_name for principled_name, _, _ in job.targets}  # each replaced above
-    _remove_nodes(material, {"targets": [found.target for name, found in replacing.items() if name not in baked]})
+    bake_revert.remove_nodes(material, {"targets": [found.target for name, found in replacing.items()
+                                                    if name not in baked]})
     nodes.remove_unused_groups(old_groups)
     osl_group.remove_unused_text()
-    _remove_images(old_images)
+    bake_revert.remove_images(old_images)
     _take_names(material, targets, images)
     created = [image.name for image in images]
 
@@ -601,7 +453,7 @@ def bake_material(material, settings=None, progress=None):
         job.run(progress)
         return finish(job)
     except BakeError:
-        discard_pending(job)
+        bake_job.discard_pending(job)
         raise
 
 
@@ -629,46 +481,3 @@ def bake_materials(materials, settings_for=None, progress=None):
         except BakeError as e:
             outcomes.append((material.name, e))
     return outcomes
-
-
-# ---- revert --------------------------------------------------------------------------------------
-
-def _remove_nodes(material, rec, keep_edits=True):
-    """Removes a bake's nodes; with keep_edits, what the user changed on its group nodes goes back
-    to the Principled BSDFs (group_node.write_back_inputs)."""
-    tree = material.node_tree
-    used = []
-    for target in rec.get("targets", []):
-        bypassed = [tuple(b) for b in target.get("bypassed", [])]
-        group = group_node.remove_group_node(tree, target["group_node"], target["principled"], bypassed,
-                                        target.get("eevee_output", ""), keep_edits, target.get("normal_map", ""),
-                                        target.get("principled_settings"))
-        if group is not None:
-            used.append(group.name)
-        used.append(target.get("node_group", ""))
-    nodes.remove_unused_groups(used)
-
-
-def _remove_images(names):
-    for name in names:
-        image = bpy.data.images.get(name)
-        if image is not None and image.get(node_builders.TAG) is not None and image.users == 0:
-            bpy.data.images.remove(image)
-
-
-def revert(material):
-    """Restores the material as it was before the bake. Its lobe folder stays for Ctrl-Z (when it
-    goes: lobe_folders.py). Returns (the folder, [names of the other materials that use it])."""
-    rec = material_scan.record(material) if material is not None else None
-    if rec is None:
-        raise BakeError("NOT_BAKED", "material '%s' has no ndfbake bake to revert" % (
-            material.name if material is not None else ""))
-    if material.library is not None:
-        raise BakeError("LINKED_MATERIAL", "material '%s' is linked from %s: revert it in that file"
-                        % (material.name, material.library.filepath))
-    folder = lobe_folders.record_folder(rec)
-    _remove_nodes(material, rec)
-    osl_group.remove_unused_text()
-    _remove_images(rec.get("images", []))
-    del material[RECORD_KEY]
-    return folder, [m.name for m in lobe_folders.folder_users(folder)] if folder else []

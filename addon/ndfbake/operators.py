@@ -1,4 +1,4 @@
-"""Operators: thin wrappers over bake.py.
+"""Operators: thin wrappers over bake.py (and bake_job.py's job API for the modal bakes).
 
 - ndfbake.bake: the active material (or `material=`). From a script or `blender -b` (execute) it
   bakes on the calling thread. From the Bake button (invoke, with a window) it runs the native
@@ -13,6 +13,9 @@
 - ndfbake.delete_unused_folders: deletes, after a confirmation dialog listing them, the lobe
   textures of the folders beside the .blend that the file does not use.
 Failures are reported as one ERROR line each; from Python, bpy.ops raises RuntimeError then.
+
+May call: bake, bake_job (a job's run/start/cancel/discard_pending), lobe_folders. Called by: ui,
+__init__ (registration).
 """
 import os
 import time
@@ -20,7 +23,7 @@ import time
 import bpy
 from bpy.props import StringProperty
 
-from . import bake, lobe_folders
+from . import bake, bake_job, lobe_folders
 
 # The job the Bake button is running (one at a time), for the panel, and the modal operator
 # running it (stop_running_bakes).
@@ -149,7 +152,7 @@ class _ModalBakes:
         """Throws jobs away: what they wrote into their pending folders, and the folder names they
         reserved (prepared jobs not started too)."""
         for job in jobs:
-            bake.discard_pending(job)
+            bake_job.discard_pending(job)
 
     def modal(self, context, event):
         job = self._job
@@ -192,7 +195,7 @@ class _ModalBakes:
             try:
                 self._outcomes.append((done.material_name, bake.finish(done)))
             except bake.BakeError as e:
-                bake.discard_pending(done)
+                bake_job.discard_pending(done)
                 self._outcomes.append((done.material_name, e))
         self._done = []
         return _report_outcomes(self, self._outcomes)

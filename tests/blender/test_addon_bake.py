@@ -878,7 +878,7 @@ def test_a_material_changed_during_the_bake_is_not_baked():
     """What the worker fitted must be what the material shows: a normal map swapped or set to
     object space while the bake ran refuses it (MATERIAL_CHANGED, nothing changed, no folder); a
     renamed material still gets its bake."""
-    from ndfbake import bake
+    from ndfbake import bake, bake_job
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         tree = material.node_tree
@@ -895,7 +895,7 @@ def test_a_material_changed_during_the_bake_is_not_baked():
             change()
             e = h.raised(bake.BakeError, lambda: bake.finish(job), "a bake of a changed material was applied")
             h.expect(e.code == "MATERIAL_CHANGED", "%s: %s" % (e.code, e.message))
-            bake.discard_pending(job)
+            bake_job.discard_pending(job)
             undo()
             h.expect(h.dump_material(material) == before, "the refused bake changed the material")
             h.expect(not [f for f in os.listdir(directory) if ".ndfbake" in f], "files left: %s" % os.listdir(directory))

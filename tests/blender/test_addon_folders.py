@@ -104,7 +104,7 @@ def test_a_copy_shares_the_folder_until_it_is_baked_itself():
 
 
 def test_a_rebake_that_fails_keeps_the_previous_bake():
-    from ndfbake import bake
+    from ndfbake import bake, bake_job
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bake.bake_material(material, bake.BakeSettings(max_lobes=3))
@@ -114,7 +114,7 @@ def test_a_rebake_that_fails_keeps_the_previous_bake():
         material.node_tree.nodes["Normal Map"].name = "Renamed"
         e = h.raised(bake.BakeError, lambda: bake.finish(job), "finish() accepted a material whose nodes changed")
         h.expect(e.code == "MATERIAL_CHANGED", "%s: %s" % (e.code, e.message))
-        bake.discard_pending(job)
+        bake_job.discard_pending(job)
         material.node_tree.nodes["Renamed"].name = "Normal Map"
         h.expect(h.listing(directory) == listing, "files changed: %s" % h.listing(directory))
         h.expect(h.dump_material(material) == baked, "the baked material changed")

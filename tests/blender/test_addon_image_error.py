@@ -38,6 +38,8 @@ import test_addon_helpers as h  # noqa: E402
 
 sys.path.insert(0, os.path.join(h.REPO, "examples"))
 import demo_scene  # noqa: E402
+import demo_build  # noqa: E402
+import demo_render  # noqa: E402
 import image_error  # noqa: E402
 
 WIDTH, HEIGHT = 128, 72
@@ -82,19 +84,19 @@ def test_image_error_against_references():
     from ndfbake import nodes
     with h.scratch_dir() as directory:
         h.reset_scene()
-        scene_info = demo_scene.build_scene(directory, WIDTH, HEIGHT, world=WORLD)
+        scene_info = demo_build.build_scene(directory, WIDTH, HEIGHT, world=WORLD)
         scene = bpy.context.scene
-        masks = demo_scene.region_masks(scene, scene_info["ground"], scene_info["far_spheres"])
+        masks = demo_render.region_masks(scene, scene_info["ground"], scene_info["far_spheres"])
         for region in REGIONS:
             windows = int(image_error.block_mask(masks[region]).sum())
             h.expect(windows >= MIN_WINDOWS, "region %s has %d windows (< %d)" % (region, windows, MIN_WINDOWS))
 
         renders = os.path.join(directory, "renders")
-        images, info = demo_scene.render_plain(scene, renders, scene_info["materials"], REFERENCE_SAMPLES, SAMPLES,
-                                               log=lambda s: print(s, flush=True))
+        images, info = demo_render.render_plain(scene, renders, scene_info["materials"], REFERENCE_SAMPLES, SAMPLES,
+                                                log=lambda s: print(s, flush=True))
         h.expect(info["eevee_reference"]["factor"] == 8, "EEVEE reference at %dx" % info["eevee_reference"]["factor"])
         # The downsampled reference is written out, not rendered: the file must hold its linear values.
-        saved = demo_scene._read_exr(os.path.join(renders, "eevee_reference.exr"))
+        saved = demo_render.read_exr(os.path.join(renders, "eevee_reference.exr"))
         h.expect(np.allclose(saved, images["eevee_reference"], rtol=1e-5, atol=1e-6),
                  "eevee_reference.exr differs from the reference it was written from (largest difference %g)"
                  % float(np.abs(saved - images["eevee_reference"]).max()))
@@ -106,14 +108,14 @@ def test_image_error_against_references():
         h.expect(sorted(b["material"] for b in bakes) == sorted(scene_info["materials"]),
                  "baked %s, expected %s" % ([b["material"] for b in bakes], scene_info["materials"]))
         h.expect(all("error" not in b for b in bakes), "a bake failed")
-        baked, _ = demo_scene.render_baked(scene, renders, SAMPLES, log=lambda s: print(s, flush=True))
+        baked, _ = demo_render.render_baked(scene, renders, SAMPLES, log=lambda s: print(s, flush=True))
         images.update(baked)
         for name, pixels in images.items():
             h.expect(np.isfinite(pixels).all(), "%s: non-finite pixels" % name)
             h.expect(float(pixels.mean()) > 0.05, "%s renders black" % name)
 
-        errors = demo_scene.measure(images, masks)
-        print(demo_scene.format_errors(errors, info), flush=True)
+        errors = demo_render.measure(images, masks)
+        print(demo_render.format_errors(errors, info), flush=True)
 
         # The references are what the figures stand on: the point-sampled, supersampled EEVEE
         # render must show the far ground brighter than the MIP-mapped naive one (averaged normals
@@ -130,7 +132,7 @@ def test_image_error_against_references():
                                   ("cycles", "rmse", "Cycles %d spp per-pixel RMSE" % SAMPLES)):
             for region in REGIONS + ("all", "ground_near"):
                 e = errors[engine][region]
-                ratio = e["ratio_" + key]  # demo_scene.measure's ndfbake / naive
+                ratio = e["ratio_" + key]  # demo_render.measure's ndfbake / naive
                 if region in REGIONS:
                     bound = ACCEPTED_RATIO
                     verdict, note = "met" if ratio <= bound else "NOT MET", "issue asks <= %.2f" % bound
@@ -149,12 +151,12 @@ def test_image_error_against_references():
         # Cycles Lobes: the widened lobes' bias at grazing views shows in converged renders (too
         # bright under a high light, too dark under a low one), which the narrowing corrects: the far
         # ground's mean luminance must come closer to the reference's with it.
-        converged = {"narrowed": demo_scene.render(scene, "CYCLES", os.path.join(renders, "narrowed.exr"),
-                                                   CONVERGED_SAMPLES, seed=5)}
+        converged = {"narrowed": demo_render.render(scene, "CYCLES", os.path.join(renders, "narrowed.exr"),
+                                                    CONVERGED_SAMPLES, seed=5)}
         rebakes = demo_scene.bake_all(scene, max_lobes=MAX_LOBES, cycles_lobes=nodes.WIDENED)
         h.expect(all("error" not in b for b in rebakes), "a Widened re-bake failed: %s" % rebakes)
-        converged["widened"] = demo_scene.render(scene, "CYCLES", os.path.join(renders, "widened.exr"),
-                                                 CONVERGED_SAMPLES, seed=5)
+        converged["widened"] = demo_render.render(scene, "CYCLES", os.path.join(renders, "widened.exr"),
+                                                  CONVERGED_SAMPLES, seed=5)
         errors = image_error.compare(converged, images["cycles_reference"], {r: masks[r] for r in REGIONS})
         off = {}
         for region, entry in errors.items():
@@ -223,7 +225,7 @@ def test_command_line_bake_changes_only_the_baked_materials():
     from ndfbake import bake, lobe_folders, node_builders
     with h.scratch_dir() as directory:
         h.reset_scene()
-        scene_info = demo_scene.build_scene(directory, WIDTH, HEIGHT, world=WORLD)
+        scene_info = demo_build.build_scene(directory, WIDTH, HEIGHT, world=WORLD)
         blend = scene_info["blend"]
         expected = sorted(scene_info["materials"])
         before = reopen(blend)

@@ -46,8 +46,8 @@ def _install_gate():
     """Holds the worker thread of a material in state["hold"] at its first "fit" progress call
     until the main thread lets it go or the job is cancelled, so that what the test observes does not depend on how fast the
     machine fits (the progress callback runs on the worker; the modal operator on the main thread)."""
-    from ndfbake import bake
-    original = bake.BakeJob.run
+    from ndfbake import bake_job
+    original = bake_job.BakeJob.run
 
     def gated_run(self, progress=None):
         def gate(stage, fraction):
@@ -57,7 +57,7 @@ def _install_gate():
                 time.sleep(0.01)
             return False
         return original(self, gate)
-    bake.BakeJob.run = gated_run
+    bake_job.BakeJob.run = gated_run
 
 
 def _finish(ok, message):
