@@ -11,7 +11,7 @@ linear light). The reference: the unbaked scene at --reference-samples with Open
 off (with it on, Cycles reads image files through OpenImageIO's texture system, which MIP-maps
 the plain normal map and so filters the reference too). Then, each at --samples with two seeds:
 naive (the unbaked scene) with OSL off and on, the stock-node group (a bake with the defaults:
-the scene camera's level of detail, widened lobes) with OSL on and off, and the OSL variant
+the scene camera's level of detail, Cycles Lobes Narrowed) with OSL on and off, and the OSL variant
 (shader OSL, a re-bake). Error: pixel RMSE against the reference per region (ground_far,
 spheres_far, all), seed 0. Noise: the RMSE between the two seeds' renders per region, divided by
 √2 (one render's per-pixel standard deviation). Time: the wall time of bpy.ops.render.render,
