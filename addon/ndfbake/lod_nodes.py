@@ -1,24 +1,30 @@
 """Level of detail in shader nodes: which texel of which MIP level a pixel reads. Shared groups
-("NDFB Level of Detail", "NDFB Atlas UV"), a material's atlas table, the lookups a material's group
+("NDFB Level of Detail", "NDFB Atlas Taps", "NDFB Bilinear"), a material's atlas table, the lookups a material's group
 makes, and the drivers that keep the footprint's camera terms live. The footprint itself is
 scene_lod.py's; nodes.py calls these while it assembles a group.
 
 Two ways to get the texel a pixel needs:
 - level of detail from the scene (AtlasLayout + scene_lod.LodPlan, the default): lobe j's MIP atlas
   (`atlas_lobej.exr`, every fitted level framed in one image) is sampled at the level the
-  "NDFB Level of Detail" group computes from the view distance and angle (scene_lod.py), with one
-  Linear lookup in each of the two levels around it ("NDFB Atlas UV" places it inside the
-  level's frame), blended. Both engines; Cycles has no MIP levels.
+  "NDFB Level of Detail" group computes from the view distance and angle (scene_lod.py), with
+  bilinear filtering done in nodes from four Closest lookups ("NDFB Atlas Taps", "NDFB
+  Bilinear") in each of the two levels around it, blended. Both engines; Cycles has no MIP levels.
+  Not one Linear lookup a level: EEVEE MIP-maps Linear images by their screen derivatives, which
+  jump where a tiled texture wraps (fract), so at every tile seam it read the atlas's coarsest
+  levels, blends of unrelated frames: dark lines on the demo's ground, dots on its spheres
+  (Blender 5.0, 2026-11-28; Cycles, which does not MIP-map, rendered it as the taps do).
 - level 0 filtered by the renderer (`level00_lobej.exr`, Linear): EEVEE MIP-maps it itself;
   Cycles only averages its samples over the pixel.
 """
 from dataclasses import dataclass
 
 from . import id_names, scene_lod
-from .node_builders import FLOAT, GROUP_VERSION, VECTOR, _find_group, _group_with_io, _link, _math, _mix, _vmath
+from .node_builders import COLOR, FLOAT, GROUP_VERSION, VECTOR, _find_group, _group_with_io, _link, _math, _mix, _vmath
 
 LOD_GROUP = "NDFB Level of Detail v%d" % GROUP_VERSION
-ATLAS_UV_GROUP = "NDFB Atlas UV v%d" % GROUP_VERSION
+TAPS_GROUP = "NDFB Atlas Taps v%d" % GROUP_VERSION
+BILINEAR_GROUP = "NDFB Bilinear v%d" % GROUP_VERSION
+TAP_CORNERS = ("00", "10", "01", "11")  # x then y offset of a bilinear tap
 LOD_INPUTS = ("Texels per Unit", "Pixel Angle", "Pixel Size")
 ATLAS_LOOKUP = "Atlas Level %d"       # the material group's atlas-table nodes (0: low, 1: high level)
 # An atlas table's name until bake._take_names names it after its group (atlas_table_name); no
@@ -65,46 +71,71 @@ def level_of_detail_group():
     return tree
 
 
-def atlas_uv_group():
-    """Where one level of a MIP atlas (native bake/lobe_atlas.h; tests/native/test_lobe_atlas.cpp
-    checks this addressing) puts a texture coordinate: inputs UV, the level's frame X, Y (top-left,
-    rows counted from the top) and size W, H, the atlas size, and Repeat (1: the texture tiles, 0:
-    it clamps); output the atlas coordinate
-
-        u = (X + 1 + w_u·W) / Atlas Width,   v = (Atlas Height − 1 − Y − H + w_v·H) / Atlas Height,
-
-    w the coordinate wrapped (fract) or clamped to [0, 1]. A renderer's bilinear (Linear) lookup there
-    reads texel centres x + 0.5 of the level exactly as a lookup of the level's own file would, and
-    the frame's one-texel border (the wrapped or clamped edge) keeps it inside the level."""
-    tree = _find_group(ATLAS_UV_GROUP)
+def atlas_taps_group():
+    """The four point lookups of bilinear filtering inside one level of a MIP atlas (native
+    bake/lobe_atlas.h; tests/native/test_lobe_atlas.cpp checks this addressing): inputs UV, the
+    level's frame X, Y (top-left, rows counted from the top) and size W, H, the atlas size, and
+    Repeat (1: the texture tiles, 0: it clamps); outputs UV 00/10/01/11 and the fractions Fx, Fy."""
+    tree = _find_group(TAPS_GROUP)
     if tree is not None:
         return tree
     tree, gin, gout = _group_with_io(
-        ATLAS_UV_GROUP,
+        TAPS_GROUP,
         [(VECTOR, "UV")] + [(FLOAT, n) for n in ("X", "Y", "W", "H", "Atlas Width", "Atlas Height", "Repeat")],
-        [(VECTOR, "Atlas UV")], (-1000, 700))
+        [(VECTOR, "UV " + c) for c in TAP_CORNERS] + [(FLOAT, "Fx"), (FLOAT, "Fy")], (-1200, 900))
     sep = tree.nodes.new("ShaderNodeSeparateXYZ")
-    sep.location = (-800, 200)
+    sep.location = (-1000, 200)
     tree.links.new(gin.outputs["UV"], sep.inputs[0])
+    aw, ah = gin.outputs["Atlas Width"], gin.outputs["Atlas Height"]
 
-    def wrapped(value, y):
-        clamped = _math(tree, "MINIMUM", _math(tree, "MAXIMUM", value, 0.0, location=(-650, y)), 1.0,
-                        location=(-500, y))
-        return _mix(tree, "FLOAT", gin.outputs["Repeat"], clamped, _math(tree, "FRACT", value, location=(-500, y - 100)),
-                    (-350, y))
+    def axis(value, size, y):
+        wrapped = _mix(tree, "FLOAT", gin.outputs["Repeat"], _math(tree, "MINIMUM", _math(
+            tree, "MAXIMUM", value, 0.0, location=(-850, y)), 1.0, location=(-700, y)),
+            _math(tree, "FRACT", value, location=(-700, y - 100)), location=(-550, y))
+        texel = _math(tree, "MULTIPLY_ADD", wrapped, size, -0.5, location=(-400, y))
+        first = _math(tree, "FLOOR", texel, location=(-250, y))
+        return first, _math(tree, "SUBTRACT", texel, first, location=(-100, y - 100))
 
-    column = _math(tree, "MULTIPLY_ADD", wrapped(sep.outputs["X"], 300), gin.outputs["W"],
-                   _math(tree, "ADD", gin.outputs["X"], 1.0, location=(-350, 450)), location=(-150, 350))
-    row_base = _math(tree, "SUBTRACT", _math(tree, "SUBTRACT", _math(
-        tree, "SUBTRACT", gin.outputs["Atlas Height"], 1.0, location=(-500, -350)), gin.outputs["Y"],
-        location=(-350, -350)), gin.outputs["H"], location=(-200, -350))
-    row = _math(tree, "MULTIPLY_ADD", wrapped(sep.outputs["Y"], -100), gin.outputs["H"], row_base,
-                location=(-50, -150))
-    comb = tree.nodes.new("ShaderNodeCombineXYZ")
-    comb.location = (300, 0)
-    tree.links.new(_math(tree, "DIVIDE", column, gin.outputs["Atlas Width"], location=(100, 300)), comb.inputs["X"])
-    tree.links.new(_math(tree, "DIVIDE", row, gin.outputs["Atlas Height"], location=(150, -150)), comb.inputs["Y"])
-    tree.links.new(comb.outputs[0], gout.inputs["Atlas UV"])
+    x0, fx = axis(sep.outputs["X"], gin.outputs["W"], 300)
+    y0, fy = axis(sep.outputs["Y"], gin.outputs["H"], -100)
+    # Column X + 1 + x0, row (from the bottom) Atlas Height − 1 − Y − H + y0; centres at + 0.5.
+    column = _math(tree, "ADD", _math(tree, "ADD", gin.outputs["X"], 1.5, location=(-100, 400)), x0,
+                   location=(50, 400))
+    row_base = _math(tree, "SUBTRACT", _math(tree, "SUBTRACT", _math(tree, "SUBTRACT", ah, 0.5, location=(-250, -300)),
+                                                 gin.outputs["Y"], location=(-100, -300)),
+                     gin.outputs["H"], location=(50, -300))
+    row = _math(tree, "ADD", row_base, y0, location=(200, -200))
+    u0 = _math(tree, "DIVIDE", column, aw, location=(300, 400))
+    u1 = _math(tree, "DIVIDE", _math(tree, "ADD", column, 1.0, location=(200, 300)), aw, location=(350, 300))
+    v0 = _math(tree, "DIVIDE", row, ah, location=(350, -200))
+    v1 = _math(tree, "DIVIDE", _math(tree, "ADD", row, 1.0, location=(350, -300)), ah, location=(500, -300))
+    for name, (u, v), y in (("UV 00", (u0, v0), 300), ("UV 10", (u1, v0), 150), ("UV 01", (u0, v1), 0),
+                            ("UV 11", (u1, v1), -150)):
+        comb = tree.nodes.new("ShaderNodeCombineXYZ")
+        comb.location = (700, y)
+        tree.links.new(u, comb.inputs["X"])
+        tree.links.new(v, comb.inputs["Y"])
+        tree.links.new(comb.outputs[0], gout.inputs[name])
+    tree.links.new(fx, gout.inputs["Fx"])
+    tree.links.new(fy, gout.inputs["Fy"])
+    return tree
+
+
+def bilinear_group():
+    """(1 − Fy)·((1 − Fx)·00 + Fx·10) + Fy·((1 − Fx)·01 + Fx·11) of four RGBA lookups."""
+    tree = _find_group(BILINEAR_GROUP)
+    if tree is not None:
+        return tree
+    tree, gin, gout = _group_with_io(
+        BILINEAR_GROUP,
+        [io for c in TAP_CORNERS for io in ((COLOR, "Color " + c), (FLOAT, "Alpha " + c))]
+        + [(FLOAT, "Fx"), (FLOAT, "Fy")],
+        [(COLOR, "Color"), (FLOAT, "Alpha")], (-600, 400))
+    fx, fy = gin.outputs["Fx"], gin.outputs["Fy"]
+    for kind, data_type, y in (("Color", "VECTOR", 200), ("Alpha", "FLOAT", -200)):
+        bottom = _mix(tree, data_type, fx, gin.outputs[kind + " 00"], gin.outputs[kind + " 10"], (-300, y + 100))
+        top = _mix(tree, data_type, fx, gin.outputs[kind + " 01"], gin.outputs[kind + " 11"], (-300, y - 100))
+        tree.links.new(_mix(tree, data_type, fy, bottom, top, (0, y)), gout.inputs[kind])
     return tree
 
 
@@ -153,8 +184,7 @@ def uv_source(tree, gin, has_vector, location):
 
 
 def atlas_levels(tree, gin, atlas, repeat, uv):
-    """The two levels the footprint falls between: per level the atlas coordinate (atlas_uv_group),
-    and the blend factor. Computed once for every lobe: the lobes' atlases share one layout."""
+    """The two levels the footprint falls between: per level the taps node, and the blend factor."""
     lod = tree.nodes.new("ShaderNodeGroup")
     lod.node_tree = level_of_detail_group()
     lod.location = (-2000, 400)
@@ -167,45 +197,50 @@ def atlas_levels(tree, gin, atlas, repeat, uv):
                  location=(-1550, 500))
     blend = _math(tree, "SUBTRACT", level, low, location=(-1700, 300))
     table = atlas_table_group(PROVISIONAL_TABLE_NAME, atlas)  # Blender numbers it where taken
-    coordinates = []
+    taps = []
     for k, index in enumerate((low, high)):
         lookup = tree.nodes.new("ShaderNodeGroup")
         lookup.name = lookup.label = ATLAS_LOOKUP % k
         lookup.node_tree = table
         lookup.location = (-1550, 300 - 250 * k)
         tree.links.new(index, lookup.inputs["Level"])
-        place = tree.nodes.new("ShaderNodeGroup")
-        place.node_tree = atlas_uv_group()
-        place.location = (-1350, 300 - 250 * k)
-        tree.links.new(uv, place.inputs["UV"])
+        tap = tree.nodes.new("ShaderNodeGroup")
+        tap.node_tree = atlas_taps_group()
+        tap.location = (-1350, 300 - 250 * k)
+        tree.links.new(uv, tap.inputs["UV"])
         for key in ("X", "Y", "W", "H"):
-            tree.links.new(lookup.outputs[key], place.inputs[key])
-        place.inputs["Atlas Width"].default_value = float(atlas.width)
-        place.inputs["Atlas Height"].default_value = float(atlas.height)
-        place.inputs["Repeat"].default_value = 1.0 if repeat else 0.0
-        coordinates.append(place.outputs["Atlas UV"])
-    return coordinates, blend
+            tree.links.new(lookup.outputs[key], tap.inputs[key])
+        tap.inputs["Atlas Width"].default_value = float(atlas.width)
+        tap.inputs["Atlas Height"].default_value = float(atlas.height)
+        tap.inputs["Repeat"].default_value = 1.0 if repeat else 0.0
+        taps.append(tap)
+    return taps, blend
 
 
-def sample_atlas(tree, image, coordinates, blend, j, y):
-    """Lobe j's RGBA at the shading point: the renderer's bilinear lookup in each of the two levels
-    (one Linear lookup a level, at atlas_uv_group's coordinate), blended. Measured against four
-    Closest lookups and bilinear weights in nodes (what this group did before): the same image in
-    Cycles, whose Linear lookup is plain bilinear; EEVEE MIP-maps Linear images (docs/rendering.md,
-    "Level of detail")."""
+def sample_atlas(tree, image, taps, blend, j, y):
+    """Lobe j's RGBA at the shading point: bilinear in each of the two levels, blended."""
     colors, alphas = [], []
-    for k, coordinate in enumerate(coordinates):
-        tex = tree.nodes.new("ShaderNodeTexImage")
-        tex.name = tex.label = "Lobe %d level %s" % (j, "low" if k == 0 else "high")
-        tex.image = image
-        tex.interpolation = "Linear"
-        tex.extension = "EXTEND"  # the frames hold the wrap; never read past the atlas
-        tex.location = (-1150, y - 200 * k)
-        tree.links.new(coordinate, tex.inputs["Vector"])
-        colors.append(tex.outputs["Color"])
-        alphas.append(tex.outputs["Alpha"])
-    return (_mix(tree, "VECTOR", blend, colors[0], colors[1], (-950, y)),
-            _mix(tree, "FLOAT", blend, alphas[0], alphas[1], (-950, y - 150)))
+    for k, tap in enumerate(taps):
+        bilinear = tree.nodes.new("ShaderNodeGroup")
+        bilinear.node_tree = bilinear_group()
+        bilinear.location = (-1000, y - 300 * k)
+        for i, corner in enumerate(TAP_CORNERS):
+            tex = tree.nodes.new("ShaderNodeTexImage")
+            tex.name = tex.label = "Lobe %d level %s %s" % (j, "low" if k == 0 else "high", corner)
+            tex.image = image
+            tex.interpolation = "Closest"  # the taps are texel centres; filtering is done in nodes
+            tex.extension = "EXTEND"
+            tex.location = (-1250, y - 300 * k - 60 * i)
+            tex.hide = True
+            tree.links.new(tap.outputs["UV " + corner], tex.inputs["Vector"])
+            tree.links.new(tex.outputs["Color"], bilinear.inputs["Color " + corner])
+            tree.links.new(tex.outputs["Alpha"], bilinear.inputs["Alpha " + corner])
+        tree.links.new(tap.outputs["Fx"], bilinear.inputs["Fx"])
+        tree.links.new(tap.outputs["Fy"], bilinear.inputs["Fy"])
+        colors.append(bilinear.outputs["Color"])
+        alphas.append(bilinear.outputs["Alpha"])
+    return (_mix(tree, "VECTOR", blend, colors[0], colors[1], (-850, y)),
+            _mix(tree, "FLOAT", blend, alphas[0], alphas[1], (-850, y - 150)))
 
 
 def sample_level0(tree, gin, image, image_texture, has_vector, j, y):

@@ -417,7 +417,7 @@ def lobe_count(group_tree):
 def remove_unused_groups(names):
     """Removes the named node groups this add-on made once nothing uses them, then the groups they
     used (a material's atlas table, the shared helpers) if nothing else uses those either."""
-    pending = list(dict.fromkeys(names)) + [lobe_nodes.LOBE_GROUP, lobe_nodes.GRAZING_GROUP, lod_nodes.LOD_GROUP, lod_nodes.ATLAS_UV_GROUP,
+    pending = list(dict.fromkeys(names)) + [lobe_nodes.LOBE_GROUP, lobe_nodes.GRAZING_GROUP, lod_nodes.LOD_GROUP, lod_nodes.TAPS_GROUP, lod_nodes.BILINEAR_GROUP,
                                                specular_split.SPLIT_GROUP, *RETIRED_GROUPS]
     while pending:
         tree = bpy.data.node_groups.get(pending.pop(0))

@@ -9,7 +9,7 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
   the one active for rendering).
 - The "NDFB Level of Detail" node group, rendered by Cycles as an emission, equals the footprint
   formula evaluated per pixel from the camera's intrinsics (independent of scene_lod's numpy).
-- The atlas path (table, atlas coordinate, a Linear lookup of the atlas) renders exactly what Cycles'
+- The atlas path (table, taps, four Closest lookups, bilinear in nodes) renders exactly what Cycles'
   own bilinear (Linear) lookup of the level's file renders, with repeat across tile borders.
 - A bake with a camera writes only the levels the camera reaches, and one atlas per lobe; the
   group's pixel angle follows the lens and the resolution through drivers; revert removes them.
@@ -203,16 +203,15 @@ def test_atlas_lookups_equal_bilinear_filtering_of_the_level_files():
             table = tree.nodes.new("ShaderNodeGroup")
             table.node_tree = lod_nodes.atlas_table_group("table %d" % level, atlas)
             table.inputs["Level"].default_value = float(level)
-            place = tree.nodes.new("ShaderNodeGroup")
-            place.node_tree = lod_nodes.atlas_uv_group()
-            tree.links.new(uv, place.inputs["UV"])
+            taps = tree.nodes.new("ShaderNodeGroup")
+            taps.node_tree = lod_nodes.atlas_taps_group()
+            tree.links.new(uv, taps.inputs["UV"])
             for key in ("X", "Y", "W", "H"):
-                tree.links.new(table.outputs[key], place.inputs[key])
-            place.inputs["Atlas Width"].default_value = float(atlas.width)
-            place.inputs["Atlas Height"].default_value = float(atlas.height)
-            place.inputs["Repeat"].default_value = 1.0
-            coordinate = place.outputs["Atlas UV"]
-            color, _alpha = lod_nodes.sample_atlas(tree, atlas_image, [coordinate, coordinate], 0.0, 0, 0)
+                tree.links.new(table.outputs[key], taps.inputs[key])
+            taps.inputs["Atlas Width"].default_value = float(atlas.width)
+            taps.inputs["Atlas Height"].default_value = float(atlas.height)
+            taps.inputs["Repeat"].default_value = 1.0
+            color, _alpha = lod_nodes.sample_atlas(tree, atlas_image, [taps, taps], 0.0, 0, 0)
             tree.links.new(color, emission.inputs["Color"])
             ours = _render_cycles(os.path.join(directory, "atlas%d.exr" % level), 64, 64)[..., :3]
 
