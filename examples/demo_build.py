@@ -143,6 +143,19 @@ def _world(scene, name):
     return world
 
 
+def fresh_scene(directory, width=320, height=180, world=DEFAULT_WORLD):
+    """build_scene in an empty file with this checkout's add-on imported, after deleting the lobe
+    folders an earlier run left in `directory` (nobody's now: left, the new bakes would go to
+    '<material>~2.ndfbake'). Returns build_scene's info."""
+    os.makedirs(directory, exist_ok=True)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    import_addon()
+    from ndfbake import lobe_folders
+    lobe_folders.delete_folders([os.path.join(directory, name) for name in sorted(os.listdir(directory))
+                                 if name.endswith(lobe_folders.FOLDER_SUFFIX)])
+    return build_scene(directory, width, height, world=world)
+
+
 def build_scene(directory, width=320, height=180, map_size=MAP_SIZE, world=DEFAULT_WORLD):
     """Builds the demo scene in the current (empty) file, lit by Blender's studio world `world`,
     and saves it as DIR/demo_scene.blend.

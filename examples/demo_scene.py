@@ -85,15 +85,7 @@ def run_demo(out, width=320, height=180, reference_samples=256, samples=16, eeve
     """Builds, renders, bakes, renders, measures; writes DIR's files and returns the report."""
     started = time.perf_counter()
     out = os.path.abspath(out)
-    os.makedirs(out, exist_ok=True)
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    demo_build.import_addon()
-    # The scene is built anew every run: an earlier run's lobe folders beside it are nobody's now
-    # (left, the new bakes would go to '<material>~2.ndfbake').
-    from ndfbake import lobe_folders
-    lobe_folders.delete_folders([os.path.join(out, name) for name in sorted(os.listdir(out))
-                                 if name.endswith(lobe_folders.FOLDER_SUFFIX)])
-    scene_info = demo_build.build_scene(out, width, height, world=world)
+    scene_info = demo_build.fresh_scene(out, width, height, world=world)
     scene = bpy.context.scene
     renders = os.path.join(out, "renders")
     log("ndfbake demo scene: %s (%dx%d, %s world)" % (scene_info["blend"], width, height, world))

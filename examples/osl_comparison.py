@@ -28,7 +28,6 @@ import time
 sys.dont_write_bytecode = True
 
 import bpy  # noqa: E402
-import numpy as np  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 if HERE not in sys.path:
@@ -56,13 +55,7 @@ def _arguments():
 
 def run(out, width, height, reference_samples, samples, log=print):
     out = os.path.abspath(out)
-    os.makedirs(out, exist_ok=True)
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    demo_build.import_addon()
-    from ndfbake import lobe_folders
-    lobe_folders.delete_folders([os.path.join(out, n) for n in sorted(os.listdir(out))
-                                 if n.endswith(lobe_folders.FOLDER_SUFFIX)])
-    info = demo_build.build_scene(out, width, height)
+    info = demo_build.fresh_scene(out, width, height)
     scene = bpy.context.scene
     scene.cycles.shading_system = True
     masks = demo_render.region_masks(scene, info["ground"], info["far_spheres"])

@@ -43,10 +43,7 @@ REGIONS = ("ground_far", "spheres_far")
 def sweep_world(out, world, width, height, samples, eevee_samples, converged_samples, variants, log=print):
     """One world: {variant: {engine: {"brightness": far-ground mean over the reference's,
     "naive_brightness", "ratio": {region: ndfbake / naive}}}}."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    demo_build.import_addon()
-    os.makedirs(out, exist_ok=True)
-    scene_info = demo_build.build_scene(out, width, height, world=world)
+    scene_info = demo_build.fresh_scene(out, width, height, world=world)
     scene = bpy.context.scene
     renders = os.path.join(out, "renders")
     masks = demo_render.region_masks(scene, scene_info["ground"], scene_info["far_spheres"])
