@@ -100,6 +100,17 @@ def live_link(socket):
     return None
 
 
+def input_may_matter(node, name):
+    """Whether input `name` of a node (a Principled BSDF, or the group node holding its inputs since
+    a bake) may change what renders: live-linked, animated or non-zero. False where it has none."""
+    index = node.inputs.find(name)
+    if index < 0:
+        return False
+    socket = node.inputs[index]
+    return (live_link(socket) is not None or socket.default_value != 0.0
+            or node_animation.input_animated(node.id_data, node, index))
+
+
 def _trace(socket):
     """(node, output socket, None) feeding `socket` through reroutes; (None, None, the muted link)
     where a muted link cuts the chain; (None, None, None) where nothing feeds it. Links, not

@@ -26,7 +26,7 @@ instead (osl_group.py); `osl_status()` says where. The stock-node group works in
 """
 import bpy
 
-from . import blender_compat, lobe_nodes, lod_nodes, material_scan, node_animation, specular_split
+from . import blender_compat, lobe_nodes, lod_nodes, material_scan, specular_split
 from .node_builders import TAG, _add_socket, _new_group, _vmath, socket_value
 
 # Shared groups of earlier versions of this add-on (version 2), removed with the last bake using them.
@@ -370,16 +370,7 @@ def transmits(node):
     since a bake) may matter: Transmission or Transmission Roughness linked (live), animated or
     non-zero. Read when the group is built: a transmission set on the group node after the bake
     shows once the material is baked again."""
-    tree = node.id_data
-    for name in TRANSMISSION_INPUTS:
-        index = node.inputs.find(name)
-        if index < 0:
-            continue
-        socket = node.inputs[index]
-        if material_scan.live_link(socket) is not None or socket.default_value != 0.0 \
-                or node_animation.input_animated(tree, node, index):
-            return True
-    return False
+    return any(material_scan.input_may_matter(node, name) for name in TRANSMISSION_INPUTS)
 
 
 def _weighted_sum(tree, shaders, weights, y):

@@ -28,7 +28,7 @@ import sys
 
 import bpy
 
-from . import nodes, specular_split
+from . import material_scan, nodes, specular_split
 from .node_builders import GROUP_VERSION, TAG
 
 SHADER_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "osl", "ndfbake_lobes.osl")
@@ -111,7 +111,7 @@ def unsupported_inputs(principled, holder):
     that the OSL shader does not draw; [] where it draws the material."""
     if "Specular IOR Level" not in principled.inputs:
         return ["Principled BSDF v1"]
-    return [name for name in UNSUPPORTED_INPUTS if specular_split._input_may_matter(holder, name)]
+    return [name for name in UNSUPPORTED_INPUTS if material_scan.input_may_matter(holder, name)]
 
 
 def shader_text():

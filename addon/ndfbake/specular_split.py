@@ -40,24 +40,13 @@ KARIS_EXP_SCALE = -9.28
 KARIS_AB_SLOPE = 1.04
 
 
-def _input_may_matter(node, name):
-    """Whether input `name` of a Principled BSDF (or of the group node holding its inputs) is live-
-    linked, animated or non-zero."""
-    index = node.inputs.find(name)
-    if index < 0:
-        return False
-    socket = node.inputs[index]
-    return (material_scan.live_link(socket) is not None or socket.default_value != 0.0
-            or node_animation.input_animated(node.id_data, node, index))
-
-
 def may_split(principled, holder):
     """Whether the bake of `principled` (whose inputs `holder` holds now: itself, or the group node
     of the bake a re-bake replaces) draws specular-only lobes over one base: Principled v2, and no
     coat, sheen or transmission that may matter."""
     if "Specular IOR Level" not in principled.inputs:
         return False
-    return not any(_input_may_matter(holder, name) for name in LAYERED_INPUTS)
+    return not any(material_scan.input_may_matter(holder, name) for name in LAYERED_INPUTS)
 
 
 CONDUCTOR, DIELECTRIC, BOTH = "CONDUCTOR", "DIELECTRIC", "BOTH"
