@@ -1,0 +1,91 @@
+"""Is EEVEE's supersampled render of the fine normals a reference? The demo scene's far ground and far
+spheres, their mean luminance in each render that bears on it (docs/rendering.md, "EEVEE Next's
+reference").
+
+    python examples/eevee_reference_study.py -- --out DIR [--world interior] [--width 128 --height 72]
+    blender -b --factory-startup --python examples/eevee_reference_study.py -- --out DIR ...
+
+Renders, all of the demo scene as examples/demo_scene.py builds it:
+- Cycles, 512 spp: the bumpy maps (the reference of ../shared/DESIGN.md) and the maps flattened
+  (Normal Map Strength 0): how much the bumps change what the regions reflect;
+- EEVEE, the maps point-sampled ('Closest') at 8x8 the resolution, box-downsampled (the EEVEE
+  reference of demo_render.render_plain), and at 1x with 256 TAA samples;
+- EEVEE, the flattened maps at 1x and at 8x8 (what EEVEE does with a smooth surface at this size);
+- EEVEE naive (64 TAA samples) and ndfbake (the add-on's defaults, 8 lobes).
+Prints a table of the regions' mean luminance in each, and writes DIR/eevee_reference_study.json.
+"""
+import argparse
+import json
+import os
+import sys
+
+import bpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import demo_build  # noqa: E402
+import demo_render  # noqa: E402
+import demo_scene  # noqa: E402
+import image_error  # noqa: E402
+
+SUPERSAMPLING = 8
+EEVEE_SAMPLES = 64
+CYCLES_SAMPLES = 512
+
+
+def set_normal_strength(material_names, strength):
+    for name in material_names:
+        for node in bpy.data.materials[name].node_tree.nodes:
+            if node.bl_idname == "ShaderNodeNormalMap":
+                node.inputs["Strength"].default_value = strength
+
+
+def main():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    parser = argparse.ArgumentParser(prog="examples/eevee_reference_study.py --")
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--world", default=demo_build.DEFAULT_WORLD)
+    parser.add_argument("--width", type=int, default=128)
+    parser.add_argument("--height", type=int, default=72)
+    args = parser.parse_args(argv)
+    out = os.path.abspath(args.out)
+    info = demo_build.fresh_scene(out, args.width, args.height, world=args.world)
+    scene, eevee, materials = bpy.context.scene, demo_build.eevee_engine(), info["materials"]
+    masks = demo_render.region_masks(scene, info["ground"], info["far_spheres"])
+    renders = os.path.join(out, "renders")
+    os.makedirs(renders, exist_ok=True)
+    images = {}
+
+    def render(name, engine, samples, factor=1):
+        pixels = demo_render.render(scene, engine, os.path.join(renders, name + ".exr"), samples,
+                                    percentage=100 * factor, seed=1)
+        images[name] = image_error.box_downsample(pixels, factor) if factor > 1 else pixels
+        print("  rendered %s" % name, flush=True)
+
+    render("cycles bumpy (reference)", "CYCLES", CYCLES_SAMPLES)
+    render("eevee naive", eevee, EEVEE_SAMPLES)
+    previous = demo_render.set_normal_interpolation(materials, "Closest")
+    render("eevee point-sampled 8x8", eevee, 16, SUPERSAMPLING)
+    render("eevee point-sampled 1x", eevee, 256)  # as many point samples a pixel as 8x8 at 4
+    demo_render.set_normal_interpolation(materials, previous)
+    set_normal_strength(materials, 0.0)
+    render("cycles flat", "CYCLES", CYCLES_SAMPLES)
+    render("eevee flat 8x8", eevee, 16, SUPERSAMPLING)
+    render("eevee flat 1x", eevee, EEVEE_SAMPLES)
+    set_normal_strength(materials, 1.0)
+    bakes = demo_scene.bake_all(scene)
+    if any("summary" not in b for b in bakes):
+        raise RuntimeError("bakes failed: %s" % bakes)
+    render("eevee ndfbake", eevee, EEVEE_SAMPLES)
+
+    regions = ("ground_far", "spheres_far")
+    table = {name: {r: image_error.mean_luminance(pixels, masks[r]) for r in regions} for name, pixels in images.items()}
+    print("%s, %dx%d: mean luminance" % (args.world, args.width, args.height))
+    print("  %-28s %10s %12s" % ("render", *regions))
+    for name, means in table.items():
+        print("  %-28s %10.3f %12.3f" % (name, means["ground_far"], means["spheres_far"]))
+    with open(os.path.join(out, "eevee_reference_study.json"), "w") as f:
+        json.dump({"blender": bpy.app.version_string, "world": args.world, "mean_luminance": table}, f, indent=2)
+
+
+if __name__ == "__main__":
+    main()
