@@ -38,8 +38,9 @@ Files (choices the design leaves open):
   the nodes do not tie to one UV map (scene_lod.texture_uv) gets "RENDERER", and the summary
   says why.
   docs/rendering.md ("Level of detail") gives the measurement behind the default.
-- Cycles lobes (BakeSettings.cycles_lobes): EEVEE always draws the lobes narrowed at grazing
-  views; Cycles draws them narrowed with its own constant (NARROWED, default: the far ground's
+- Cycles lobes (BakeSettings.cycles_lobes): EEVEE draws the lobes as its generation needs them
+  (nodes.GRAZING_NARROWING: narrowed at grazing views in EEVEE Legacy, widened in EEVEE Next);
+  Cycles draws them narrowed with its own constant (NARROWED, default: the far ground's
   converged brightness within 10% of the reference under most of Blender's studio worlds) or
   widened only (WIDENED: the fewest fireflies at low sample counts under a small bright light,
   too bright or too dark at grazing views). docs/rendering.md ("Grazing views") has the figures.

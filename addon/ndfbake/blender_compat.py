@@ -52,6 +52,11 @@ def eevee_engine():
     return "BLENDER_EEVEE_NEXT" if (4, 2, 0) <= bpy.app.version < (5, 0, 0) else "BLENDER_EEVEE"
 
 
+def eevee_next():
+    """True where EEVEE is EEVEE Next (4.2 on), which replaced EEVEE Legacy."""
+    return bpy.app.version >= (4, 2, 0)
+
+
 def linear_color_space():
     """The name of the linear Rec.709 colour space: "Linear" in 3.x, "Linear Rec.709" from 4.0."""
     names = bpy.types.ColorManagedInputColorspaceSettings.bl_rna.properties["name"].enum_items.keys()

@@ -19,7 +19,8 @@ The group has two shader outputs, each with its own lobes: BSDF (Cycles, and bot
 the material's graph is the user's) and EEVEE BSDF, which EEVEE draws through a Material Output of
 target EEVEE that the bake adds beside the user's (group_node.add_eevee_output) and Revert
 removes. Each output's lobes are narrowed toward grazing views with its engine's constant
-(GRAZING_NARROWING; lobe_nodes.grazing_roughness_group), Cycles' unless cycles_lobes is WIDENED.
+(GRAZING_NARROWING; lobe_nodes.grazing_roughness_group) where it has one, Cycles' unless
+cycles_lobes is WIDENED.
 
 OSL: where Cycles runs OSL on the CPU, a bake may draw Cycles' lobes through one Script node
 instead (osl_group.py); `osl_status()` says where. The stock-node group works in both engines.
@@ -35,11 +36,15 @@ RETIRED_GROUPS = tuple("NDFB %s v2" % name for name in ("vMF Lobe", "Grazing Rou
 EEVEE_BSDF = "EEVEE BSDF"             # the group's second shader output (narrowed lobes)
 # BakeSettings.cycles_lobes: what the group's BSDF output (Cycles' view) draws.
 WIDENED, NARROWED = "WIDENED", "NARROWED"
-# C of lobe_nodes.grazing_roughness_group, per group output (the engine that draws it): Cycles'
-# fitted offline against the normal map's own response (docs/grazing-fit.md; brdf.h
-# kGrazingNarrowing, which ndfbake.glsl uses too), EEVEE's measured on the demo scene
-# (examples/world_sweep.py; docs/rendering.md, "Grazing views").
-GRAZING_NARROWING = {"BSDF": 4.0, EEVEE_BSDF: 32.0}
+# C of lobe_nodes.grazing_roughness_group, per group output (the engine that draws it); 0: the
+# lobes are drawn widened, not narrowed. Cycles' fitted offline against the normal map's own
+# response (docs/grazing-fit.md; brdf.h kGrazingNarrowing, which ndfbake.glsl uses too). EEVEE's
+# measured on the demo scene under Blender's 8 studio worlds (examples/world_sweep.py;
+# docs/rendering.md, "Grazing views"): EEVEE Legacy (3.x) 32, against its own supersampled render
+# of the fine normals; EEVEE Next (4.2+) none, against the Cycles reference, which it comes closer
+# to widened under every world (EEVEE Next's own supersampled render of the fine normals loses
+# what they reflect: docs/rendering.md, "EEVEE Next's reference").
+GRAZING_NARROWING = {"BSDF": 4.0, EEVEE_BSDF: 0.0 if blender_compat.eevee_next() else 32.0}
 # Principled inputs the lobe group computes itself rather than passing through.
 COMPUTED_INPUTS = {"Normal", "Roughness"}
 # Principled inputs the group draws once, beside the lobes, rather than in every lobe (_emission).
@@ -107,8 +112,8 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     BSDF and EEVEE BSDF outputs, shading through len(lobe_images) lobes: level-0 textures that
     the renderer filters itself (atlas None), or MIP atlases (AtlasLayout) sampled at the level
     of detail the scene gives (lod: a scene_lod.LodPlan, required with an atlas). Each output's
-    lobes are narrowed toward grazing views with its constant (GRAZING_NARROWING), BSDF's not
-    with cycles_lobes WIDENED; with cycles_lobes None the BSDF output is left unlinked for the
+    lobes are narrowed toward grazing views with its constant (GRAZING_NARROWING) where it is not
+    0, BSDF's not with cycles_lobes WIDENED; with cycles_lobes None the BSDF output is left unlinked for the
     caller (osl_group draws Cycles' lobes itself). For a
     re-bake, `current` is the group node of the bake it replaces, which holds the Principled's
     inputs (held_input)."""
@@ -176,7 +181,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         nm = _normal_map(tree, gin, normal_map, dec.outputs["Normal"], (-550, y - 150))
         for output, (dy, _) in layout.items():
             roughness = dec.outputs["Roughness"]
-            if output == EEVEE_BSDF or cycles_lobes == NARROWED:
+            if GRAZING_NARROWING[output] and (output == EEVEE_BSDF or cycles_lobes == NARROWED):
                 roughness = _grazing_roughness(tree, gin, dec, nm, names, "Grazing %d %s" % (j, output),
                                                GRAZING_NARROWING[output], (-300, y + dy - 150))
             shaders[output].append(_lobe_bsdf(tree, gin, principled, carried, roughness, nm,

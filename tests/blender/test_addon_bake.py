@@ -221,7 +221,8 @@ def _lobe_roughness_sources(tree, output):
 
 def test_cycles_lobes_narrowed_or_widened():
     """Cycles Lobes: Narrowed (the default) gives Cycles' lobes (the user's output) a grazing
-    narrowing of their own (nodes.GRAZING_NARROWING["BSDF"]) beside EEVEE's (its own output); a
+    narrowing of their own (nodes.GRAZING_NARROWING["BSDF"]) beside EEVEE's (its own output:
+    EEVEE Legacy's narrowing, or in EEVEE Next the widened lobes); a
     re-bake with Widened gives Cycles the widened lobes only; bad values are refused."""
     from ndfbake import bake, lobe_nodes, nodes
     with h.scratch_dir() as directory:
@@ -237,6 +238,10 @@ def test_cycles_lobes_narrowed_or_widened():
                  == _principled_count(tree, nodes.EEVEE_BSDF) and not set(cycles.values()) & set(eevee.values()),
                  "Cycles' lobes %s, EEVEE's %s, %d lobes" % (cycles, eevee, result.lobes))
         for output, sources in (("BSDF", cycles), (nodes.EEVEE_BSDF, eevee)):
+            if not nodes.GRAZING_NARROWING[output]:  # EEVEE Next: its lobes are drawn widened
+                h.expect(all(source.startswith("Decode") for source in sources.values()),
+                         "%s: a lobe does not take the decoded (widened) roughness: %s" % (output, sources))
+                continue
             narrowing = {tree.nodes[source].inputs["Narrowing"].default_value for source in sources.values()}
             h.expect(all(tree.nodes[source].node_tree == lobe_nodes.grazing_roughness_group() for source in sources.values())
                      and narrowing == {nodes.GRAZING_NARROWING[output]},

@@ -5,15 +5,16 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 The scene is examples/demo_scene.py's (a receding metal ground plane and four metal spheres, five
 normal maps synthesized by the library, the interior HDR, 8 lobes), built at 128x72:
 
-- test_image_error_against_references, the issue's acceptance (printed and asserted). EEVEE: the
-  reference is the same scene rendered by EEVEE at 8x8 the resolution with the normal maps
-  point-sampled ('Closest', no MIP-mapping), box-downsampled; the figure is the RMS over 4x4-pixel
-  windows of the difference in mean luminance (examples/image_error.py). Cycles: the reference has
-  512 samples per pixel of the unfiltered maps; naive and ndfbake have 16; the figure is the
-  per-pixel RMSE in linear RGB, with the block error printed beside it.
+- test_image_error_against_references, the issue's acceptance (printed and asserted). Cycles: the
+  reference has 512 samples per pixel of the unfiltered maps; naive and ndfbake have 16; the figure
+  is the per-pixel RMSE in linear RGB, with the block error printed beside it. EEVEE: the figure is
+  the RMS over 4x4-pixel windows of the difference in mean luminance (examples/image_error.py)
+  against, in EEVEE Legacy (3.x), the same scene rendered by EEVEE at 8x8 the resolution with the
+  normal maps point-sampled ('Closest', no MIP-mapping), box-downsampled, and in EEVEE Next (4.2+)
+  the Cycles reference (EEVEE_FIGURE says why; its own-reference figure is printed beside it).
   On each region where filtering matters (the ground beyond 8 m, the two far spheres) ndfbake's
-  error must be at most half of the naive normal map's, in both engines (EEVEE Next, 4.2+:
-  printed and held to regression bounds; EEVEE_ASSERTED says why). Every figure is printed,
+  error must be at most half of the naive normal map's, in both engines (EEVEE Next's far spheres:
+  held to a regression bound, EEVEE_NEXT_REGRESSION_BOUNDS). Every figure is printed,
   also for the whole image and the near ground (held to regression bounds). The references are
   checked first: the far ground of the EEVEE reference must be brighter than the naive render
   (the bumps' steep slopes catch the ceiling light, which MIP-averaged normals lose), and the
@@ -56,16 +57,20 @@ REGIONS = ("ground_far", "spheres_far")   # where filtering matters; "all", "gro
 # 0.34 / 0.38 over three seeds, examples/cycles_noise_study.py). The scene needs 8 lobes: with 4, EEVEE's far ground measured
 # 0.80. Under the sunset world Cycles misses (0.88 / 1.23: its low sun backlights the far spheres,
 # whose naive error is then the world's sampling noise; docs/rendering.md "Image error").
-# EEVEE Next (4.2 and later) misses it, so it is held to the regression bounds below instead.
-# Blender 5.0, 2026-11-28: far ground 0.674, far spheres 1.104 (naive's far ground is within 0.035
-# of the reference there, so little is left to gain; on the far spheres both are 0.35 off). It
-# extracts the world's brightest spot into a sun light (World.sun_threshold), which the lobes
-# reflected with the grazing-view bias (ratio 6.01 before the narrowing had its own constant for
-# EEVEE; docs/rendering.md "Grazing views"). Cycles in 5.0
-# meets it (0.272 / 0.046).
-EEVEE_ASSERTED = bpy.app.version < (4, 2, 0)
-# What EEVEE Next is held to meanwhile: a margin over what it measured (0.674 / 1.104, whole image 0.538).
-EEVEE_NEXT_REGRESSION_BOUNDS = {"ground_far": 0.8, "spheres_far": 1.25, "all": 0.65}
+# EEVEE Next (4.2 and later) is measured against the Cycles reference, the ground truth of
+# ../shared/DESIGN.md, not against its own supersampled render of the fine normals, which loses
+# much of what they reflect: far ground 0.244 against Cycles' 0.762 (no brighter than naive's
+# 0.237), far spheres 0.37 against 1.03 (docs/rendering.md, "EEVEE Next's reference"). That
+# figure is printed beside it. Blender 5.0, 2026-11-28, EEVEE Next's lobes widened: far ground 0.25
+# (meets 0.5), far spheres 0.70 (misses: EEVEE Next renders even a smooth sphere of this size at
+# half its brightness at 8x8 the resolution and in Cycles), so the spheres are held to a regression
+# bound (EEVEE_NEXT_REGRESSION_BOUNDS) and the far ground to the issue's 0.5. Cycles in 5.0 meets it
+# (0.272 / 0.046).
+EEVEE_NEXT = bpy.app.version >= (4, 2, 0)
+EEVEE_FIGURE = "eevee_cycles" if EEVEE_NEXT else "eevee"   # demo_render.FIGURES
+# What EEVEE Next's figure is held to where it misses: a margin over what it measured (far spheres
+# 0.70; whole image 0.52). EEVEE's own-reference figure in 4.2+ is printed only.
+EEVEE_NEXT_REGRESSION_BOUNDS = {"spheres_far": 0.8, "all": 0.6}
 # The regions shown for information are held to regression bounds with a margin over what they
 # measured (EEVEE 0.660 on the whole image in 3.4; Cycles 0.311 on the whole image, 0.243 on the near
 # ground). EEVEE's near ground has none: ndfbake renders it brighter than the reference there
@@ -117,21 +122,27 @@ def test_image_error_against_references():
         errors = demo_render.measure(images, masks)
         print(demo_render.format_errors(errors, info), flush=True)
 
-        # The references are what the figures stand on: the point-sampled, supersampled EEVEE
-        # render must show the far ground brighter than the MIP-mapped naive one (averaged normals
-        # flatten the bumps, whose steep slopes catch the ceiling light), and differ from it.
-        far = errors["eevee"]["ground_far"]
+        # The references are what the figures stand on: EEVEE's (its supersampled render of the
+        # point-sampled map in 3.x, Cycles' in 4.2+) must show the far ground brighter than the
+        # MIP-mapped naive EEVEE render (averaged normals flatten the bumps, whose steep slopes
+        # catch the ceiling light), and differ from it.
+        far = errors[EEVEE_FIGURE]["ground_far"]
         h.expect(far["reference"]["mean"] > far["naive"]["mean"],
-                 "EEVEE reference's far ground (%.4f) is not brighter than the naive render's (%.4f)"
+                 "EEVEE's reference's far ground (%.4f) is not brighter than the naive render's (%.4f)"
                  % (far["reference"]["mean"], far["naive"]["mean"]))
         h.expect(far["naive"]["block"] > 0.05 * far["reference"]["mean"],
                  "the naive render is within %.4f of the EEVEE reference: nothing to measure" % far["naive"]["block"])
 
         failures = []
-        for engine, key, what in (("eevee", "block", "EEVEE block-luminance error"),
-                                  ("cycles", "rmse", "Cycles %d spp per-pixel RMSE" % SAMPLES)):
+        figures = [(EEVEE_FIGURE, "block", "EEVEE block-luminance error vs the %s reference"
+                    % ("Cycles" if EEVEE_NEXT else "supersampled EEVEE")),
+                   ("cycles", "rmse", "Cycles %d spp per-pixel RMSE" % SAMPLES)]
+        if EEVEE_NEXT:
+            figures.append(("eevee", "block", "EEVEE block-luminance error vs its own supersampled render"))
+        for figure, key, what in figures:
+            engine = "cycles" if figure == "cycles" else "eevee"
             for region in REGIONS + ("all", "ground_near"):
-                e = errors[engine][region]
+                e = errors[figure][region]
                 ratio = e["ratio_" + key]  # demo_render.measure's ndfbake / naive
                 if region in REGIONS:
                     bound = ACCEPTED_RATIO
@@ -139,9 +150,11 @@ def test_image_error_against_references():
                 else:
                     bound = REGRESSION_BOUNDS.get((engine, region))
                     verdict, note = "info", "regression bound %.2f" % bound if bound else "no bound"
-                if engine == "eevee" and not EEVEE_ASSERTED:
-                    bound = EEVEE_NEXT_REGRESSION_BOUNDS.get(region)
-                    note += "; EEVEE Next: regression bound %s" % ("%.2f" % bound if bound else "none")
+                if figure == "eevee" and EEVEE_NEXT:
+                    bound, verdict, note = None, "info", "not a reference in EEVEE Next: printed only"
+                elif engine == "eevee" and EEVEE_NEXT and region in EEVEE_NEXT_REGRESSION_BOUNDS:
+                    bound = EEVEE_NEXT_REGRESSION_BOUNDS[region]
+                    note += "; EEVEE Next: regression bound %.2f" % bound
                 print("  %s %s, %s: ndfbake %.4f / naive %.4f = %.3f (%s)" % (
                     verdict, what, region, e["ndfbake"][key], e["naive"][key], ratio, note), flush=True)
                 if bound is not None and not ratio <= bound:
