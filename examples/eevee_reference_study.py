@@ -65,7 +65,7 @@ def main():
     render("eevee naive", eevee, EEVEE_SAMPLES)
     previous = demo_render.set_normal_interpolation(materials, "Closest")
     render("eevee point-sampled 8x8", eevee, 16, SUPERSAMPLING)
-    render("eevee point-sampled 1x", eevee, 256)  # as many point samples a pixel as 8x8 at 4
+    render("eevee point-sampled 1x", eevee, 256)  # 256 point samples a pixel (8x8 at 16 samples: 1,024)
     demo_render.set_normal_interpolation(materials, previous)
     set_normal_strength(materials, 0.0)
     render("cycles flat", "CYCLES", CYCLES_SAMPLES)

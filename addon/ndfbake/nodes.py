@@ -33,7 +33,7 @@ from .node_builders import TAG, _add_socket, _new_group, _vmath, socket_value
 # Shared groups of earlier versions of this add-on (version 2), removed with the last bake using them.
 RETIRED_GROUPS = tuple("NDFB %s v2" % name for name in ("vMF Lobe", "Grazing Roughness", "Level of Detail",
                                                          "Atlas Taps", "Bilinear"))
-EEVEE_BSDF = "EEVEE BSDF"             # the group's second shader output (narrowed lobes)
+EEVEE_BSDF = "EEVEE BSDF"             # the group's second shader output (EEVEE's own lobes)
 # BakeSettings.cycles_lobes: what the group's BSDF output (Cycles' view) draws.
 WIDENED, NARROWED = "WIDENED", "NARROWED"
 # C of lobe_nodes.grazing_roughness_group, per group output (the engine that draws it); 0: the
@@ -113,9 +113,8 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     the renderer filters itself (atlas None), or MIP atlases (AtlasLayout) sampled at the level
     of detail the scene gives (lod: a scene_lod.LodPlan, required with an atlas). Each output's
     lobes are narrowed toward grazing views with its constant (GRAZING_NARROWING) where it is not
-    0, BSDF's not with cycles_lobes WIDENED; with cycles_lobes None the BSDF output is left unlinked for the
-    caller (osl_group draws Cycles' lobes itself). For a
-    re-bake, `current` is the group node of the bake it replaces, which holds the Principled's
+    0, BSDF's not with cycles_lobes WIDENED; with cycles_lobes None the BSDF output is left
+    unlinked for the caller (osl_group draws Cycles' lobes itself). For a re-bake, `current` is the group node of the bake it replaces, which holds the Principled's
     inputs (held_input)."""
     tree = _new_group(name)
     decode = lobe_nodes.lobe_group()
