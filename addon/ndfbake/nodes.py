@@ -114,8 +114,8 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     of detail the scene gives (lod: a scene_lod.LodPlan, required with an atlas). Each output's
     lobes are narrowed toward grazing views with its constant (GRAZING_NARROWING) where it is not
     0, BSDF's not with cycles_lobes WIDENED; with cycles_lobes None the BSDF output is left
-    unlinked for the caller (osl_group draws Cycles' lobes itself). For a re-bake, `current` is the group node of the bake it replaces, which holds the Principled's
-    inputs (held_input)."""
+    unlinked for the caller (osl_group draws Cycles' lobes itself). For a re-bake, `current` is
+    the group node of the bake it replaces, which holds the Principled's inputs (held_input)."""
     tree = _new_group(name)
     decode = lobe_nodes.lobe_group()
     carried = carried_inputs(principled, current)
