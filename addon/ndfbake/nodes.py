@@ -180,9 +180,10 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         nm = _normal_map(tree, gin, normal_map, dec.outputs["Normal"], (-550, y - 150))
         for output, (dy, _) in layout.items():
             roughness = dec.outputs["Roughness"]
-            if GRAZING_NARROWING[output] and (output == EEVEE_BSDF or cycles_lobes == NARROWED):
+            narrowing = grazing_narrowing(output, cycles_lobes)
+            if narrowing:
                 roughness = _grazing_roughness(tree, gin, dec, nm, names, "Grazing %d %s" % (j, output),
-                                               GRAZING_NARROWING[output], (-300, y + dy - 150))
+                                               narrowing, (-300, y + dy - 150))
             shaders[output].append(_lobe_bsdf(tree, gin, principled, carried, roughness, nm,
                                               "Lobe %d %s" % (j, output), (0, y + dy), multiscatter, kind))
         weights.append(dec.outputs["Weight"])
@@ -205,6 +206,12 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     if "BSDF" in sums:
         tree.links.new(sums["BSDF"], gout.inputs["BSDF"])
     return tree
+
+
+def grazing_narrowing(output, cycles_lobes):
+    """C of the grazing narrowing that `output`'s lobes are drawn with (0: widened): its engine's
+    GRAZING_NARROWING, Cycles' (BSDF) only with cycles_lobes NARROWED."""
+    return GRAZING_NARROWING[output] if output == EEVEE_BSDF or cycles_lobes == NARROWED else 0.0
 
 
 def _grazing_roughness(tree, gin, decode, normal, names, name, narrowing, location):

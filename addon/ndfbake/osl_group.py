@@ -166,7 +166,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     inputs["SlotMask"].default_value = sum(1 << j for j in slots)
     inputs["Repeat"].default_value = 1 if image_texture.extension == "REPEAT" else 0
     inputs["UVMapName"].default_value = normal_map.uv_map
-    inputs["Narrowing"].default_value = nodes.GRAZING_NARROWING["BSDF"] if cycles_lobes == nodes.NARROWED else 0.0
+    inputs["Narrowing"].default_value = nodes.grazing_narrowing("BSDF", cycles_lobes)
     inputs["distribution"].default_value = "multi_ggx" if principled.distribution in ("GGX", "MULTI_GGX") else "ggx"
 
     # The texture coordinate the original image read, with its ray differentials (connected).
