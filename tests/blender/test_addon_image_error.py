@@ -68,6 +68,7 @@ REGIONS = ("ground_far", "spheres_far")   # where filtering matters; "all", "gro
 # (0.272 / 0.046).
 EEVEE_NEXT = bpy.app.version >= (4, 2, 0)
 EEVEE_FIGURE = "eevee_cycles" if EEVEE_NEXT else "eevee"   # demo_render.FIGURES
+FIGURE_ENGINE = {figure: engine for figure, engine, _ in demo_render.FIGURES}
 # What EEVEE Next's figure is held to where it misses: a margin over what it measured (far spheres
 # 0.70; whole image 0.52). EEVEE's own-reference figure in 4.2+ is printed only.
 EEVEE_NEXT_REGRESSION_BOUNDS = {"spheres_far": 0.8, "all": 0.6}
@@ -140,7 +141,7 @@ def test_image_error_against_references():
         if EEVEE_NEXT:
             figures.append(("eevee", "block", "EEVEE block-luminance error vs its own supersampled render"))
         for figure, key, what in figures:
-            engine = "cycles" if figure == "cycles" else "eevee"
+            engine = FIGURE_ENGINE[figure]
             for region in REGIONS + ("all", "ground_near"):
                 e = errors[figure][region]
                 ratio = e["ratio_" + key]  # demo_render.measure's ndfbake / naive
