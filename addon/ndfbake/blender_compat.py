@@ -47,14 +47,14 @@ def new_interface_socket(tree, in_out, socket_type, name):
     return socket
 
 
-def eevee_engine():
-    """The render engine id of EEVEE: BLENDER_EEVEE in 3.x and 5.0+, BLENDER_EEVEE_NEXT in 4.2-4.x."""
-    return "BLENDER_EEVEE_NEXT" if (4, 2, 0) <= bpy.app.version < (5, 0, 0) else "BLENDER_EEVEE"
-
-
 def eevee_next():
     """True where EEVEE is EEVEE Next (4.2 on), which replaced EEVEE Legacy."""
     return bpy.app.version >= (4, 2, 0)
+
+
+def eevee_engine():
+    """The render engine id of EEVEE: BLENDER_EEVEE in 3.x and 5.0+, BLENDER_EEVEE_NEXT in 4.2-4.x."""
+    return "BLENDER_EEVEE_NEXT" if eevee_next() and bpy.app.version < (5, 0, 0) else "BLENDER_EEVEE"
 
 
 def linear_color_space():
