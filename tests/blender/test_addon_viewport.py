@@ -9,9 +9,9 @@ through the scene camera in a full-screen 3D viewport in Material Preview (scene
 overlays). The render resolution is set to the camera frame's size in the viewport, so that the
 bake's level of detail fits both. Then:
 - EEVEE renders the plain material ("naive") and, after the bake, the baked one;
-- the viewport, once its samples have settled, is captured (screenshot_area) and cropped to the
-  camera frame;
-- in blocks of 8×8 pixels, the screenshot is closer to the baked render than to the naive one
+- the viewport, once its samples have settled, is drawn by Blender's viewport code into an
+  offscreen buffer (GPUOffScreen.draw_view3d) and cropped to the camera frame;
+- in blocks of 8×8 pixels, the viewport is closer to the baked render than to the naive one
   (at most half the difference), and close to it in absolute terms.
 Images go to OUTDIR: viewport.png, eevee-naive.png, eevee-ndfbake.png. Exits 0 when every check
 holds, 1 otherwise (printed).
@@ -21,6 +21,7 @@ import sys
 import time
 
 import bpy
+import gpu
 import numpy as np
 from bpy_extras import view3d_utils
 
@@ -118,16 +119,25 @@ def _blocks(rgb):
 
 
 def _shoot():
-    """The viewport's camera frame as the screen shows it (display values, rows bottom-up)."""
+    """The viewport's camera frame as Blender draws it (display values, rows bottom-up): the 3D
+    view drawn by Blender's own viewport code (GPUOffScreen.draw_view3d: that view's engine,
+    shading and matrices) into an offscreen buffer kept across calls, so that EEVEE accumulates its
+    samples there as in the window. Not a screenshot: 4.3's window reads back black under Xvfb."""
     window, area, region = _view3d()
-    path = os.path.join(state["out"], "viewport-full.png")
+    if state.get("offscreen") is None:
+        state["offscreen"] = gpu.types.GPUOffScreen(region.width, region.height)
+    offscreen = state["offscreen"]
+    region_3d = area.spaces.active.region_3d
     with bpy.context.temp_override(window=window, area=area, region=region):
-        bpy.ops.screen.screenshot_area(filepath=path)
-    full = h.load_pixels(path)[..., :3]
+        offscreen.draw_view3d(bpy.context.scene, bpy.context.view_layer, area.spaces.active, region,
+                              region_3d.view_matrix, region_3d.window_matrix, do_color_management=True)
+    with offscreen.bind():
+        framebuffer = gpu.state.active_framebuffer_get()
+        buffer = framebuffer.read_color(0, 0, region.width, region.height, 4, 0, "FLOAT")
+    buffer.dimensions = region.width * region.height * 4
+    full = np.array(buffer, dtype=np.float32).reshape(region.height, region.width, 4)[..., :3]
     x0, y0, x1, y1 = state["frame"]
-    # screenshot_area captures the area; the region sits at its offset inside it.
-    ox, oy = region.x - area.x, region.y - area.y
-    return full[y0 + oy:y1 + oy, x0 + ox:x1 + ox]
+    return full[y0:y1, x0:x1]
 
 
 def _tick():
@@ -170,12 +180,12 @@ def _tick():
         image.file_format = "PNG"
         image.save()
         naive, baked = state["naive"], state["baked"]
-        h.expect(shot.shape == baked.shape, "screenshot %s vs render %s" % (shot.shape, baked.shape))
+        h.expect(shot.shape == baked.shape, "viewport %s vs render %s" % (shot.shape, baked.shape))
         s, b, n = _blocks(shot), _blocks(baked), _blocks(naive)
         to_baked, to_naive, baked_naive = (float(np.abs(s - b).mean()), float(np.abs(s - n).mean()),
                                            float(np.abs(b - n).mean()))
         print("viewport (Material Preview) vs EEVEE render, mean |difference| of %dx%d blocks: ndfbake render %.4f, "
-              "naive render %.4f (ndfbake vs naive renders %.4f); %d screenshots to settle"
+              "naive render %.4f (ndfbake vs naive renders %.4f); %d draws to settle"
               % (BLOCK, BLOCK, to_baked, to_naive, baked_naive, state["shots"]), flush=True)
         h.expect(baked_naive > 0.01, "the filtered and naive renders hardly differ: nothing to compare")
         h.expect(to_baked <= 0.5 * to_naive, "the viewport is not closer to the filtered render than to the naive one")
