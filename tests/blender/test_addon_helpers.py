@@ -298,6 +298,34 @@ def close_file():
     return outcome
 
 
+def bake_record(material):
+    """The bake's record on `material` (material_scan.record), or None."""
+    from ndfbake import material_scan
+    return material_scan.record(material)
+
+
+def bake_group_nodes(material):
+    """The group nodes that bakes put into `material`'s tree."""
+    return [n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeGroup" and n.get("ndfbake")]
+
+
+def bake_with_a_bug_in(material, function, **settings):
+    """Bakes with <function> of the node modules (nodes, group_node, lod_nodes) raising, and returns
+    the BakeError the bake must end with."""
+    from ndfbake import bake, group_node, lod_nodes, nodes
+    module = next(m for m in (nodes, group_node, lod_nodes) if hasattr(m, function))
+    original = getattr(module, function)
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("simulated bug")
+    setattr(module, function, broken)
+    try:
+        return raised(bake.BakeError, lambda: bake.bake_material(material, bake.BakeSettings(**settings)),
+                      "the simulated bug in %s.%s did not surface" % (module.__name__, function))
+    finally:
+        setattr(module, function, original)
+
+
 def raised(error_type, call, failure):
     """The error_type exception that call() raises; fails the test with `failure` if it returns."""
     try:
