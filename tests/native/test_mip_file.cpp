@@ -57,14 +57,29 @@ std::vector<Level> read_mip_levels(const std::string& path, OIIO::ImageSpec* fir
 
 TEST(MipFile, OpenExrRoundUpLevelsAreTheBakesLevels)
 {
+    // A chain of the bake's level sizes is the chain OpenEXR lays out (the writer checks against
+    // its layout), and reads back level by level at those sizes.
+    const std::string path = (std::filesystem::path(::testing::TempDir()) / "ndfbake-mip-levels.exr").string();
     for (const auto& [w, h] : std::vector<std::pair<int, int>>{
              {1, 1}, {2, 2}, {64, 64}, {200, 72}, {5, 3}, {1000, 1}, {3, 1024}, {4097, 17}}) {
-        ASSERT_EQ(mip_level_count(w, h), level_count(w, h)) << w << "x" << h;
+        std::vector<std::vector<float>> pixels;
+        std::vector<RgbaLevel> chain;
         for (int l = 0; l < level_count(w, h); ++l) {
-            EXPECT_EQ(mip_level_extent(w, l), level_size(w, h, l).width) << w << "x" << h << " level " << l;
-            EXPECT_EQ(mip_level_extent(h, l), level_size(w, h, l).height) << w << "x" << h << " level " << l;
+            const LevelSize size = level_size(w, h, l);
+            pixels.emplace_back(size_t(size.width) * size_t(size.height) * 4, float(l));
+        }
+        for (int l = 0; l < level_count(w, h); ++l)
+            chain.push_back({level_size(w, h, l).width, level_size(w, h, l).height, pixels[size_t(l)].data()});
+        ASSERT_NO_THROW(write_mip_rgba_exr(path, chain, PixelPrecision::half, {})) << w << "x" << h;
+        const std::vector<Level> read = read_mip_levels(path);
+        ASSERT_EQ(int(read.size()), level_count(w, h)) << w << "x" << h;
+        for (int l = 0; l < level_count(w, h); ++l) {
+            EXPECT_EQ(read[size_t(l)].width, level_size(w, h, l).width) << w << "x" << h << " level " << l;
+            EXPECT_EQ(read[size_t(l)].height, level_size(w, h, l).height) << w << "x" << h << " level " << l;
+            EXPECT_EQ(read[size_t(l)].rgba.front(), float(l)) << w << "x" << h << " level " << l;
         }
     }
+    std::filesystem::remove(path);
 }
 
 TEST(MipFile, AChainOfOtherSizesIsRefused)
@@ -72,10 +87,19 @@ TEST(MipFile, AChainOfOtherSizesIsRefused)
     const std::vector<float> pixels(64 * 4, 0.0f);
     const std::string path = (std::filesystem::path(::testing::TempDir()) / "ndfbake-mip-refused.exr").string();
     const std::vector<RgbaLevel> short_chain = {{8, 8, pixels.data()}, {4, 4, pixels.data()}};
-    EXPECT_THROW(write_mip_rgba_exr(path, short_chain, PixelPrecision::half, {}), Error);
     const std::vector<RgbaLevel> rounded_down = {{5, 5, pixels.data()}, {2, 2, pixels.data()}, {1, 1, pixels.data()}};
-    EXPECT_THROW(write_mip_rgba_exr(path, rounded_down, PixelPrecision::half, {}), Error);
-    EXPECT_FALSE(std::filesystem::exists(path));
+    for (const auto& chain : {short_chain, rounded_down}) {
+        try {
+            write_mip_rgba_exr(path, chain, PixelPrecision::half, {});
+            ADD_FAILURE() << "a chain of " << chain.size() << " levels from " << chain[0].width << "x" << chain[0].height
+                          << " was written";
+        } catch (const Error& e) {
+            EXPECT_EQ(e.status(), Status::invalid_argument) << e.what();
+        }
+    }
+    // Nothing is left, not even the temporary file the checks ran in.
+    for (const auto& entry : std::filesystem::directory_iterator(::testing::TempDir()))
+        EXPECT_EQ(entry.path().filename().string().find("ndfbake-mip-refused"), std::string::npos) << entry.path();
 }
 
 class MipFileBake : public testing_support::CApiTest {};

@@ -167,7 +167,7 @@ void write_mip_file(const LobePyramid& pyramid, const DecodeResult& decoded, con
                     const WriteSettings& write, const std::vector<LevelStats>& stats, int lobe,
                     const std::string& path)
 {
-    const int chain = mip_level_count(pyramid.source.width, pyramid.source.height);
+    const int chain = level_count(pyramid.source.width, pyramid.source.height);
     std::vector<std::vector<float>> textures;
     for (int level = 0; level < chain; ++level)
         textures.push_back(level < pyramid.level_count()

@@ -9,6 +9,7 @@
 #include "bake/lobe_files.h"
 #include "bake/memory_budget.h"
 #include "io/json_writer.h"
+#include "pyramid/footprint.h"
 
 namespace ndfbake {
 
@@ -136,7 +137,7 @@ std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded,
     }
     if (write.mipmap)
         json.begin_object("mipmap")
-            .value("levels", mip_level_count(pyramid.source.width, pyramid.source.height))
+            .value("levels", level_count(pyramid.source.width, pyramid.source.height))
             .value("fitted_levels", pyramid.level_count())
             .value("rounding", "up: level L is ceil(w / 2^L) x ceil(h / 2^L), as the fitted levels")
             .value("tile", kMipTileSize)

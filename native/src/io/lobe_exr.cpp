@@ -233,19 +233,6 @@ void write_rgba_exr(const std::string& path, int width, int height, const float*
     });
 }
 
-int mip_level_count(int width, int height)
-{
-    int levels = 1;
-    while ((int64_t(1) << (levels - 1)) < std::max(width, height)) ++levels;
-    return levels;
-}
-
-int mip_level_extent(int extent, int level)
-{
-    const int64_t span = int64_t(1) << level;
-    return int(std::max<int64_t>(1, (extent + span - 1) / span));
-}
-
 void write_mip_rgba_exr(const std::string& path, std::span<const RgbaLevel> levels, PixelPrecision precision,
                         const std::vector<ExrAttribute>& attributes, ExrCompression compression)
 {
@@ -253,26 +240,28 @@ void write_mip_rgba_exr(const std::string& path, std::span<const RgbaLevel> leve
         throw Error(Status::invalid_argument, "cannot write '" + path + "': " + why);
     };
     if (levels.empty() || levels[0].width <= 0 || levels[0].height <= 0) refuse("no pixels");
+    for (size_t level = 0; level < levels.size(); ++level)
+        if (!levels[level].rgba) refuse("level " + std::to_string(level) + " has no pixels");
     const int width = levels[0].width, height = levels[0].height;
-    if (int(levels.size()) != mip_level_count(width, height))
-        refuse(std::to_string(levels.size()) + " levels, a " + std::to_string(width) + " x " +
-               std::to_string(height) + " MIP chain has " + std::to_string(mip_level_count(width, height)));
-    for (size_t level = 0; level < levels.size(); ++level) {
-        const int w = mip_level_extent(width, int(level)), h = mip_level_extent(height, int(level));
-        if (levels[level].width != w || levels[level].height != h || !levels[level].rgba)
-            refuse("level " + std::to_string(level) + " is " + std::to_string(levels[level].width) + " x " +
-                   std::to_string(levels[level].height) + ", expected " + std::to_string(w) + " x " +
-                   std::to_string(h));
-    }
     const exr_pixel_type_t type = precision == PixelPrecision::half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
     write_file_atomic(path, [&](const std::string& temp_path) {
         ExrWriter writer(temp_path, path);
         const int part = write_header(writer.get(), width, height, type, attributes, compression, path, true);
+        // The chain must be the one OpenEXR lays out for this header (its level count and sizes),
+        // checked before any tile is written.
         int32_t levels_x = 0, levels_y = 0;
         check(exr_get_tile_levels(writer.get(), part, &levels_x, &levels_y), path);
         if (levels_x != int(levels.size()) || levels_y != int(levels.size()))
-            throw Error(Status::internal, "cannot write '" + path + "': OpenEXR lays out " + std::to_string(levels_x) +
-                                              " levels, the chain has " + std::to_string(levels.size()));
+            refuse(std::to_string(levels.size()) + " levels, a " + std::to_string(width) + " x " +
+                   std::to_string(height) + " MIP chain has " + std::to_string(levels_x));
+        for (size_t level = 0; level < levels.size(); ++level) {
+            int32_t w = 0, h = 0;
+            check(exr_get_level_sizes(writer.get(), part, int(level), int(level), &w, &h), path);
+            if (levels[level].width != w || levels[level].height != h)
+                refuse("level " + std::to_string(level) + " is " + std::to_string(levels[level].width) + " x " +
+                       std::to_string(levels[level].height) + ", expected " + std::to_string(w) + " x " +
+                       std::to_string(h));
+        }
         {
             // Destroyed before finish(), which releases the context the encoder refers to.
             ChunkEncoder encoder(writer.get(), part, path);

@@ -50,16 +50,12 @@ struct RgbaLevel {
 // its own maketx's default.
 inline constexpr int kMipTileSize = 64;
 
-// The levels OpenEXR's MIPMAP_LEVELS with ROUND_UP gives a w × h image: ⌈w / 2^L⌉ × ⌈h / 2^L⌉
-// (at least 1) for L = 0 .. ⌈log₂ max(w, h)⌉, which are the bake's own level sizes
-// (pyramid/footprint.h). ROUND_DOWN (⌊w / 2^L⌋, one level fewer for most non-powers of two)
-// would not hold the fitted levels of such a map; for powers of two the two agree.
-int mip_level_count(int width, int height);
-int mip_level_extent(int extent, int level);  // ⌈extent / 2^level⌉, at least 1
-
 // Writes every level of a MIP chain as one tiled OpenEXR file (MIPMAP_LEVELS, ROUND_UP, tiles of
 // kMipTileSize²), RGBA, with the given header attributes, atomically (see write_file_atomic).
-// `levels` must be the whole chain: mip_level_count(levels[0]) levels, level L of the size above.
+// `levels` must be the whole chain OpenEXR lays out for levels[0]'s size: with ROUND_UP, level L
+// is ⌈w / 2^L⌉ × ⌈h / 2^L⌉ (at least 1) for L = 0 .. ⌈log₂ max(w, h)⌉, the bake's own level sizes
+// (pyramid/footprint.h); ROUND_DOWN (one level fewer for most non-powers of two) would not hold
+// the fitted levels of such a map. The sizes are checked against OpenEXR's own layout.
 // Throws Error(invalid_argument) for a chain of other sizes, Error(io_error) for a failed write.
 void write_mip_rgba_exr(const std::string& path, std::span<const RgbaLevel> levels, PixelPrecision precision,
                         const std::vector<ExrAttribute>& attributes,
