@@ -26,6 +26,8 @@
 namespace ndfbake::io_fixtures {
 
 namespace fs = std::filesystem;
+using testing_support::read_bytes;
+using testing_support::write_bytes;
 
 inline constexpr int kWidth = 32;  // not square, so a transposed read shows up
 inline constexpr int kHeight = 16;
@@ -124,17 +126,6 @@ void write_image(const std::string& path, int width, int height, int channels,
     ASSERT_TRUE(out->open(path, spec)) << out->geterror();
     ASSERT_TRUE(out->write_image(OIIO::TypeDescFromC<T>::value(), data.data())) << out->geterror();
     ASSERT_TRUE(out->close()) << out->geterror();
-}
-
-inline std::string read_bytes(const std::string& path)
-{
-    std::ifstream file(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
-}
-
-inline void write_bytes(const std::string& path, const std::string& bytes)
-{
-    std::ofstream(path, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
 }
 
 inline float max_difference(const std::vector<Vec3>& a, const std::vector<Vec3>& b)

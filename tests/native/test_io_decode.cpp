@@ -2,6 +2,7 @@
 // conventions (DirectX / OpenGL green, sRGB tags, float encodings), the repair rule, in-memory
 // pixels, and the errors for bad files. Fixture images are written at test time with OpenImageIO
 // into a fresh folder per test (io_fixtures.h).
+
 #include <gtest/gtest.h>
 
 #include "io_fixtures.h"

@@ -1,5 +1,6 @@
 // Tests for io/ writing: the self-describing EXR round trip (pixels, typed attributes, run-length
 // and half files), atomic writes and output folders, and report.json's writer.
+
 #include <gtest/gtest.h>
 
 #include "io_fixtures.h"
