@@ -53,7 +53,7 @@ make jpg_rgb jpg uint8 3 0
 make bmp_rgb bmp uint8 3 0
 make hdr_rgb hdr float 3 0
 
-# Headers that claim 100000 x 100000 pixels (no pixel data), as in test_hostile_inputs.cpp.
+# Headers that claim 100000 x 100000 pixels (no pixel data), as in tests/native/hostile_fixtures.h.
 python3 - "$tmp" <<'PY'
 import struct, sys, zlib
 tmp = sys.argv[1]
