@@ -121,8 +121,8 @@ def _blocks(rgb):
 def _shoot():
     """The viewport's camera frame as Blender draws it (display values, rows bottom-up): the 3D
     view drawn by Blender's own viewport code (GPUOffScreen.draw_view3d: that view's engine,
-    shading and matrices) into an offscreen buffer kept across calls, so that EEVEE accumulates its
-    samples there as in the window. Not a screenshot: 4.3's window reads back black under Xvfb."""
+    shading and matrices) into one offscreen buffer, drawn again until two draws agree (_tick).
+    Not a screenshot: 4.3's window reads back black under Xvfb."""
     window, area, region = _view3d()
     if state.get("offscreen") is None:
         state["offscreen"] = gpu.types.GPUOffScreen(region.width, region.height)
