@@ -62,15 +62,22 @@ def float_image(name):
     return image
 
 
+def diffuse_material(name):
+    """A new material drawing one Diffuse BSDF: (material, that node)."""
+    m = bpy.data.materials.new(name)
+    m.use_nodes = True
+    nodes = m.node_tree.nodes
+    nodes.remove(nodes["Principled BSDF"])
+    bsdf = nodes.new("ShaderNodeBsdfDiffuse")
+    m.node_tree.links.new(bsdf.outputs["BSDF"], nodes["Material Output"].inputs["Surface"])
+    return m, bsdf
+
+
 def bumpy_material():
     """Diffuse with a Bump node over height sin(ax) sin(ay) sin(az) of the object coordinates: math
     nodes, which every Blender evaluates alike (the Noise texture's output changed in 4.0)."""
-    m = bpy.data.materials.new("bumpy")
-    m.use_nodes = True
+    m, bsdf = diffuse_material("bumpy")
     nodes, links = m.node_tree.nodes, m.node_tree.links
-    nodes.remove(nodes["Principled BSDF"])
-    bsdf = nodes.new("ShaderNodeBsdfDiffuse")
-    links.new(bsdf.outputs["BSDF"], nodes["Material Output"].inputs["Surface"])
     coord = nodes.new("ShaderNodeTexCoord")
     xyz = nodes.new("ShaderNodeSeparateXYZ")
     links.new(coord.outputs["Object"], xyz.inputs["Vector"])
@@ -104,12 +111,8 @@ def normal_map_material(image, uv_name):
     specular closures bend theirs where the mirror direction would leave the surface (Cycles'
     ensure_valid_specular_reflection; in 4.2+ it moves some texels here by up to 19 degrees), which
     is no part of the tangent-space round trip."""
-    m = bpy.data.materials.new("normal_mapped")
-    m.use_nodes = True
+    m, bsdf = diffuse_material("normal_mapped")
     nodes, links = m.node_tree.nodes, m.node_tree.links
-    nodes.remove(nodes["Principled BSDF"])
-    bsdf = nodes.new("ShaderNodeBsdfDiffuse")
-    links.new(bsdf.outputs["BSDF"], nodes["Material Output"].inputs["Surface"])
     tex = nodes.new("ShaderNodeTexImage")
     tex.image = image
     tex.interpolation = "Closest"
