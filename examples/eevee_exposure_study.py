@@ -30,7 +30,7 @@ def main():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(prog="examples/eevee_exposure_study.py --")
     parser.add_argument("--out", required=True)
-    parser.add_argument("--world", default=demo_build.DEFAULT_WORLD)
+    parser.add_argument("--world", default=demo_build.DEFAULT_WORLD, choices=demo_build.world_names())
     parser.add_argument("--samples", type=int, default=64)
     args = parser.parse_args(argv)
     out = os.path.abspath(args.out)

@@ -83,7 +83,7 @@ def main():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(prog="examples/eevee_reference_study.py --")
     parser.add_argument("--out", required=True)
-    parser.add_argument("--world", default=demo_build.DEFAULT_WORLD)
+    parser.add_argument("--world", default=demo_build.DEFAULT_WORLD, choices=demo_build.world_names())
     parser.add_argument("--width", type=int, default=128)
     parser.add_argument("--height", type=int, default=72)
     args = parser.parse_args(argv)
