@@ -29,15 +29,15 @@ bl_info = {
 if "bpy" in locals():
     import importlib
     for _module in (blender_compat, id_names, native, image_pixels, node_animation, material_scan,  # noqa: F821
-                    scene_lod, node_builders, specular_split, lobe_nodes, lod_nodes, nodes, group_node,  # noqa: F821
-                    osl_group, lobe_folders, bake_job, bake_revert, bake, operators, ui):  # noqa: F821
+                    scene_lod, node_builders, specular_albedo_table, specular_split, lobe_nodes, lod_nodes,  # noqa: F821
+                    nodes, group_node, osl_group, lobe_folders, bake_job, bake_revert, bake, operators, ui):  # noqa: F821
         importlib.reload(_module)
 
 import bpy  # noqa: E402
 
 from . import (bake, bake_job, bake_revert, blender_compat, group_node, id_names, image_pixels,  # noqa: E402,F401
                lobe_folders, lobe_nodes, lod_nodes, material_scan, native, node_animation, node_builders, nodes,
-               operators, osl_group, scene_lod, specular_split, ui)
+               operators, osl_group, scene_lod, specular_albedo_table, specular_split, ui)
 
 
 def register():

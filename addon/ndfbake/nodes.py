@@ -286,6 +286,8 @@ def _base_bsdf(tree, gin, principled, carried, normal_map, moments, names, locat
         if key in names:
             tree.links.new(gin.outputs[key], split.inputs[key])
     tree.links.new(normal, split.inputs["Normal"])
+    # What the original's specular takes out of its diffuse follows its distribution, not the lobes'.
+    split.inputs["Multiscatter"].default_value = 1.0 if principled.distribution == "MULTI_GGX" else 0.0
 
     bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
     bsdf.name = bsdf.label = BASE_BSDF
@@ -418,9 +420,11 @@ def lobe_count(group_tree):
 
 def remove_unused_groups(names):
     """Removes the named node groups this add-on made once nothing uses them, then the groups they
-    used (a material's atlas table, the shared helpers) if nothing else uses those either."""
-    pending = list(dict.fromkeys(names)) + [lobe_nodes.LOBE_GROUP, lobe_nodes.GRAZING_GROUP, lod_nodes.LOD_GROUP, lod_nodes.TAPS_GROUP, lod_nodes.BILINEAR_GROUP,
-                                               specular_split.SPLIT_GROUP, *RETIRED_GROUPS]
+    used (a material's atlas table, the shared helpers) if nothing else uses those either, and the
+    specular layer's table image once no group uses it."""
+    shared = [lobe_nodes.LOBE_GROUP, lobe_nodes.GRAZING_GROUP, lod_nodes.LOD_GROUP, lod_nodes.TAPS_GROUP,
+              lod_nodes.BILINEAR_GROUP, specular_split.SPLIT_GROUP, *specular_split.RETIRED_SPLIT_GROUPS, *RETIRED_GROUPS]
+    pending = list(dict.fromkeys(names)) + shared
     while pending:
         tree = bpy.data.node_groups.get(pending.pop(0))
         if tree is None or tree.get(TAG) is None or tree.users != 0:
@@ -428,3 +432,4 @@ def remove_unused_groups(names):
         # Found through the nodes, not by name: a long material name cuts "<group> atlas" short.
         pending += [n.node_tree.name for n in tree.nodes if n.bl_idname == "ShaderNodeGroup" and n.node_tree]
         bpy.data.node_groups.remove(tree)
+    specular_split.remove_unused_table()

@@ -28,7 +28,7 @@ import sys
 
 import bpy
 
-from . import material_scan, nodes, specular_split
+from . import material_scan, nodes, specular_albedo_table, specular_split
 from .node_builders import GROUP_VERSION, TAG
 
 SHADER_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "osl", "ndfbake_lobes.osl")
@@ -114,10 +114,20 @@ def unsupported_inputs(principled, holder):
     return [name for name in UNSUPPORTED_INPUTS if material_scan.input_may_matter(holder, name)]
 
 
-def shader_text():
-    """The internal text the Script node compiles: the add-on's .osl source, kept up to date."""
+def shader_source():
+    """The add-on's .osl source with the specular layer's table written in (ndfb_layer_table)."""
     with open(SHADER_FILE, encoding="utf-8") as f:
         source = f.read()
+    for name, values in (("NDFB_FRESNEL_SHAPE", specular_albedo_table.FRESNEL_SHAPE),
+                         ("NDFB_GGX_ALBEDO", specular_albedo_table.GGX_ALBEDO),
+                         ("NDFB_MULTISCATTER_FRESNEL", specular_albedo_table.MULTISCATTER_FRESNEL)):
+        source = source.replace(name, ", ".join("%.4f" % v for v in values))
+    return source
+
+
+def shader_text():
+    """The internal text the Script node compiles: shader_source(), kept up to date."""
+    source = shader_source()
     text = bpy.data.texts.get(TEXT_NAME)
     if text is None or text.get(TAG) is None:
         text = bpy.data.texts.new(TEXT_NAME)
@@ -168,6 +178,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     inputs["UVMapName"].default_value = normal_map.uv_map
     inputs["Narrowing"].default_value = nodes.grazing_narrowing("BSDF", cycles_lobes)
     inputs["distribution"].default_value = "multi_ggx" if principled.distribution in ("GGX", "MULTI_GGX") else "ggx"
+    inputs["Multiscatter"].default_value = 1 if principled.distribution == "MULTI_GGX" else 0
 
     # The texture coordinate the original image read, with its ray differentials (connected).
     if "Vector" in gin.outputs:

@@ -8,12 +8,15 @@ accuracy a Lambertian term has (it is smooth in the normal). So where it may, a 
 
 - one "base" Principled BSDF at the texel's mean normal (Σ_j α_j·r_j, the first moment of the
   lobes) with the original roughness, Metallic 0, Specular IOR Level 0 (no specular layer of its
-  own), and Base Color = c·(1 − m)·(1 − E_s), c the Base Color, m Metallic: the diffuse (and
-  subsurface) a Principled v2 draws under its dielectric specular layer, which takes the layer's
-  directional albedo E_s out of it (Cycles' layering; EEVEE's split sum). E_s is approximated by
-  Karis's fit of GGX's split-sum albedo (Karis 2014, "Physically Based Shading on Mobile"):
-  E_s ≈ t·(F0·A(μ, r) + B(μ, r)), μ the view cosine at the mean normal, r the roughness, t the
-  Specular Tint. No base at all where Metallic is a constant 1: it would draw nothing.
+  own), and Base Color = c·(1 − m)·(1 − max over R, G, B of E_s), c the Base Color, m Metallic:
+  the diffuse (and subsurface) a Principled v2 draws under its dielectric specular layer, which
+  takes the layer's directional albedo E_s out of it as Cycles estimates it
+  (bsdf_microfacet_estimate_albedo, closure_layering_weight): E_s = mix(F0·t, 1, s)·M, t the
+  Specular Tint, F0 the dielectric's after Specular IOR Level, s where the lobe-averaged Fresnel
+  lies between F0 and 1, M = E + F_ms·(1 − E) for Multiscatter GGX (1 for GGX). s, E and F_ms are
+  read from one table image (tools/specular_albedo.py computes them; specular_albedo_table.py
+  holds them), two lookups per material. No base at all where Metallic is a constant 1: it would
+  draw nothing.
 - per lobe, the Principled BSDF's specular only: where Metallic is a constant 1 a conductor
   (Metallic 1: the original's metal lobe), where it is a constant 0 the dielectric layer over a
   black base (no diffuse closure), else both, mixed by Metallic as the Principled mixes them.
@@ -25,19 +28,19 @@ there a lobe stays a whole copy of the Principled BSDF. Nor in Principled v1 (Bl
 Checked by tests/blender/test_addon_render.py's furnace at view angles down to 2° (metal and
 dielectric).
 """
-from . import material_scan, node_animation
-from .node_builders import COLOR, FLOAT, GROUP_VERSION, VECTOR, _find_group, _group_with_io, _math, _vmath
+import bpy
 
-SPLIT_GROUP = "NDFB Specular Split v%d" % GROUP_VERSION
+from . import material_scan, node_animation
+from . import specular_albedo_table as table
+from .node_builders import COLOR, FLOAT, GROUP_VERSION, VECTOR, _find_group, _group_with_io, _link, _math, _vmath
+
+SPLIT_GROUP = "NDFB Specular Layer v%d" % GROUP_VERSION
+RETIRED_SPLIT_GROUPS = ("NDFB Specular Split v%d" % GROUP_VERSION,)   # drew Karis's fit (until 2026-11-28)
 SPLIT_INPUTS = ("Base Color", "Metallic", "IOR", "Specular IOR Level", "Specular Tint", "Roughness")
 # Layers that keep a lobe a whole Principled BSDF (Principled v2 names).
 LAYERED_INPUTS = ("Coat Weight", "Sheen Weight", "Transmission Weight")
-# Karis 2014's fit of the split-sum GGX albedo: r·C0 + C1 (r the roughness), then
-# a = min(x², 2^(EXP_SCALE·μ))·x + y, A = −1.04·a + z, B = 1.04·a + w.
-KARIS_C0 = (-1.0, -0.0275, -0.572, 0.022)
-KARIS_C1 = (1.0, 0.0425, 1.04, -0.04)
-KARIS_EXP_SCALE = -9.28
-KARIS_AB_SLOPE = 1.04
+TABLE_IMAGE = "NDFB Specular Layer Table"
+TABLE_KEY = "ndfbake specular layer table"   # the image's ID property: what remove_unused_table removes
 
 
 def may_split(principled, holder):
@@ -66,51 +69,129 @@ def lobe_kind(holder):
     return BOTH
 
 
+def table_pixels():
+    """The table image's RGBA floats, rows bottom up: row i is roughness i/15, and column j·16 + k
+    holds (s(r, z_j, √μ_k), E(r, √μ_k), F_ms(r, z_j), 1): z slices of 16 √μ columns side by side."""
+    r_size, z_size, mu_size = table.ROUGHNESS_SIZE, table.Z_SIZE, table.MU_SIZE
+    pixels = []
+    for i in range(r_size):
+        for j in range(z_size):
+            for k in range(mu_size):
+                pixels += (table.FRESNEL_SHAPE[(i * z_size + j) * mu_size + k], table.GGX_ALBEDO[i * mu_size + k],
+                           table.MULTISCATTER_FRESNEL[i * z_size + j], 1.0)
+    return pixels
+
+
+def table_image():
+    """A new packed float image of table_pixels(), Non-Color."""
+    width, height = table.MU_SIZE * table.Z_SIZE, table.ROUGHNESS_SIZE
+    image = bpy.data.images.new(TABLE_IMAGE, width, height, alpha=True, float_buffer=True)
+    image.colorspace_settings.name = "Non-Color"
+    image.alpha_mode = "CHANNEL_PACKED"
+    image.pixels.foreach_set(table_pixels())
+    image.pack()
+    image[TABLE_KEY] = GROUP_VERSION
+    return image
+
+
+def remove_unused_table():
+    """Removes the table images no group uses any more (after the last split group is removed)."""
+    for image in [image for image in bpy.data.images if image.get(TABLE_KEY) is not None and image.users == 0]:
+        bpy.data.images.remove(image)
+
+
+def _table_lookup(tree, image, column, v, slice_index, location):
+    """The table's RGB at slice `slice_index`, √μ column `column` (texel units), row coordinate v."""
+    u = _math(tree, "DIVIDE", _math(tree, "MULTIPLY_ADD", slice_index, float(table.MU_SIZE), column,
+                                    location=location), float(table.MU_SIZE * table.Z_SIZE),
+              location=(location[0] + 150, location[1]))
+    uv = tree.nodes.new("ShaderNodeCombineXYZ")
+    uv.location = (location[0] + 300, location[1])
+    tree.links.new(u, uv.inputs["X"])
+    _link(tree, v, uv.inputs["Y"])
+    tex = tree.nodes.new("ShaderNodeTexImage")
+    tex.image = image
+    tex.interpolation = "Linear"   # bilinear in √μ and roughness; the slices are mixed in nodes
+    tex.extension = "EXTEND"
+    tex.location = (location[0] + 450, location[1])
+    tree.links.new(uv.outputs["Vector"], tex.inputs["Vector"])
+    rgb = tree.nodes.new("ShaderNodeSeparateXYZ")
+    rgb.location = (location[0] + 750, location[1])
+    tree.links.new(tex.outputs["Color"], rgb.inputs["Vector"])
+    return rgb.outputs
+
+
 def specular_split_group():
-    """Inputs SPLIT_INPUTS and Normal (the base's, world space); output Diffuse Color, the base's
-    Base Color."""
+    """Inputs SPLIT_INPUTS, Multiscatter (1 where the Principled draws Multiscatter GGX, else 0) and
+    Normal (the base's, world space); output Diffuse Color, the base's Base Color."""
     tree = _find_group(SPLIT_GROUP)
     if tree is not None:
         return tree
     tree, gin, gout = _group_with_io(
         SPLIT_GROUP, [(COLOR, "Base Color"), (FLOAT, "Metallic"), (FLOAT, "IOR"), (FLOAT, "Specular IOR Level"),
-                      (COLOR, "Specular Tint"), (FLOAT, "Roughness"), (VECTOR, "Normal")],
-        [(COLOR, "Diffuse Color")], (-1400, 900))
+                      (COLOR, "Specular Tint"), (FLOAT, "Roughness"), (FLOAT, "Multiscatter"), (VECTOR, "Normal")],
+        [(COLOR, "Diffuse Color")], (-1400, 1500))
     metallic = _math(tree, "MINIMUM", _math(tree, "MAXIMUM", gin.outputs["Metallic"], 0.0, location=(-1200, 500)),
                      1.0, location=(-1050, 500))
     dielectric = _math(tree, "SUBTRACT", 1.0, metallic, location=(-900, 500))
 
-    tint = gin.outputs["Specular Tint"]
-    # F0_d = 2·level·((η − 1)/(η + 1))², at most 1 (a level above 0.5 on a high IOR would pass it).
+    # F0 = 2·level·((η − 1)/(η + 1))² in [0, 1] (Cycles moves η to match a level other than 0.5).
     eta = gin.outputs["IOR"]
     ratio = _math(tree, "DIVIDE", _math(tree, "SUBTRACT", eta, 1.0, location=(-1200, 200)),
                   _math(tree, "MAXIMUM", _math(tree, "ADD", eta, 1.0, location=(-1200, 100)), 1e-6,
                         location=(-1050, 100)), location=(-900, 200))
-    f0 = _math(tree, "MINIMUM", _math(tree, "MULTIPLY", _math(tree, "MULTIPLY", ratio, ratio, location=(-750, 200)),
-                                      _math(tree, "MULTIPLY", gin.outputs["Specular IOR Level"], 2.0,
-                                            location=(-750, 50)), location=(-600, 200)), 1.0, location=(-450, 200))
+    f0 = _math(tree, "MULTIPLY", _math(tree, "MULTIPLY", ratio, ratio, location=(-750, 200)),
+               _math(tree, "MULTIPLY", gin.outputs["Specular IOR Level"], 2.0, location=(-750, 50)),
+               location=(-600, 200), clamp=True)
 
-    # E_s ≈ t·(F0_d·A + B) at μ = max(view · normal, 0) (Karis 2014).
+    # The table's coordinates: √μ (μ = max(view · normal, 0)) and roughness in texels' centres,
+    # z = F0^(1/4) between two slices.
     geometry = tree.nodes.new("ShaderNodeNewGeometry")
     geometry.location = (-1200, -400)
     mu = _math(tree, "MAXIMUM", _vmath(tree, "DOT_PRODUCT", geometry.outputs["Incoming"], gin.outputs["Normal"],
                                        location=(-1050, -400), output=1), 0.0, location=(-900, -400))
-    rough = gin.outputs["Roughness"]
-    x, y, z, w = (_math(tree, "MULTIPLY_ADD", rough, c0, c1, location=(-900, -550 - 100 * i))
-                  for i, (c0, c1) in enumerate(zip(KARIS_C0, KARIS_C1)))
-    falloff = _math(tree, "POWER", 2.0, _math(tree, "MULTIPLY", mu, KARIS_EXP_SCALE, location=(-750, -400)),
-                    location=(-600, -400))
-    a = _math(tree, "MULTIPLY_ADD", _math(tree, "MINIMUM", _math(tree, "MULTIPLY", x, x, location=(-600, -550)),
-                                          falloff, location=(-450, -450)), x, y, location=(-300, -450))
-    scale = _math(tree, "MULTIPLY_ADD", a, -KARIS_AB_SLOPE, z, location=(-150, -400))
-    bias = _math(tree, "MULTIPLY_ADD", a, KARIS_AB_SLOPE, w, location=(-150, -550))
-    albedo = _math(tree, "MINIMUM", _math(tree, "MAXIMUM", _math(tree, "MULTIPLY_ADD", f0, scale, bias,
-                                                                 location=(0, -450)), 0.0, location=(150, -450)),
-                   1.0, location=(300, -450))
-    # Diffuse Color = c·(1 − m)·(1 − t·E_s)
-    kept = _vmath(tree, "SUBTRACT", (1.0, 1.0, 1.0), _vmath(tree, "SCALE", tint, scale=albedo, location=(450, -400)),
-                  location=(600, -300))
-    diffuse = _vmath(tree, "SCALE", _vmath(tree, "MULTIPLY", gin.outputs["Base Color"], kept, location=(750, -200)),
-                     scale=dielectric, location=(900, -100))
+    last = float(table.MU_SIZE - 1)
+    column = _math(tree, "MULTIPLY_ADD", _math(tree, "SQRT", mu, location=(-750, -400)), last, 0.5,
+                   location=(-600, -400))
+    rough = _math(tree, "MULTIPLY", gin.outputs["Roughness"], 1.0, location=(-900, -600), clamp=True)
+    v = _math(tree, "DIVIDE", _math(tree, "MULTIPLY_ADD", rough, float(table.ROUGHNESS_SIZE - 1), 0.5,
+                                    location=(-750, -600)), float(table.ROUGHNESS_SIZE), location=(-600, -600))
+    z = _math(tree, "MULTIPLY", _math(tree, "POWER", f0, 0.25, location=(-450, 200)), float(table.Z_SIZE - 1),
+              location=(-300, 200))
+    lower = _math(tree, "MINIMUM", _math(tree, "FLOOR", z, location=(-150, 200)), float(table.Z_SIZE - 2),
+                  location=(0, 200))
+    between = _math(tree, "SUBTRACT", z, lower, location=(150, 200))
+    image = table_image()
+    low = _table_lookup(tree, image, column, v, lower, (-450, -900))
+    high = _table_lookup(tree, image, column, v, _math(tree, "ADD", lower, 1.0, location=(-600, -1200)),
+                         (-450, -1200))
+
+    def between_slices(channel, y):
+        return _math(tree, "MULTIPLY_ADD", _math(tree, "SUBTRACT", high[channel], low[channel], location=(450, y)),
+                     between, low[channel], location=(600, y))
+    shape = between_slices("X", -900)
+    albedo = low["Y"]
+    # M = E + F_ms·(1 − E) with Multiscatter GGX, 1 with GGX
+    compensated = _math(tree, "MULTIPLY_ADD", between_slices("Z", -1050),
+                        _math(tree, "SUBTRACT", 1.0, albedo, location=(600, -1200)), albedo, location=(750, -1050))
+    scale = _math(tree, "MULTIPLY_ADD", _math(tree, "SUBTRACT", compensated, 1.0, location=(900, -1050)),
+                  gin.outputs["Multiscatter"], 1.0, location=(1050, -1050))
+    # E_s = mix(F0·t, 1, s)·M per channel = (F0·(1 − s)·t + s)·M
+    tinted = _vmath(tree, "SCALE", gin.outputs["Specular Tint"],
+                    scale=_math(tree, "MULTIPLY", f0, _math(tree, "SUBTRACT", 1.0, shape, location=(750, -800)),
+                                location=(900, -800)), location=(1050, -700))
+    # (a float linked to a vector socket is read as (s, s, s))
+    layer = _vmath(tree, "SCALE", _vmath(tree, "ADD", tinted, shape, location=(1200, -700)), scale=scale,
+                   location=(1350, -700))
+    channels = tree.nodes.new("ShaderNodeSeparateXYZ")
+    channels.location = (1500, -700)
+    tree.links.new(layer, channels.inputs["Vector"])
+    strongest = _math(tree, "MAXIMUM", _math(tree, "MAXIMUM", channels.outputs["X"], channels.outputs["Y"],
+                                             location=(1650, -650)), channels.outputs["Z"], location=(1800, -700))
+    # Diffuse Color = c·(1 − m)·clamp(1 − max E_s) (closure_layering_weight)
+    kept = _math(tree, "SUBTRACT", 1.0, strongest, location=(1950, -700), clamp=True)
+    diffuse = _vmath(tree, "SCALE", gin.outputs["Base Color"],
+                     scale=_math(tree, "MULTIPLY", kept, dielectric, location=(2100, -500)), location=(2250, -300))
     tree.links.new(diffuse, gout.inputs["Diffuse Color"])
     return tree
+

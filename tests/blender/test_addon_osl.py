@@ -188,7 +188,7 @@ def test_lobe_normals_are_the_normal_map_nodes():
         bake.bake_material(material, bake.BakeSettings(max_lobes=2, shader="OSL"))
         group = next(n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeGroup").node_tree
         script = osl_group.script_node(group)
-        source = open(osl_group.SHADER_FILE, encoding="utf-8").read()
+        source = osl_group.shader_source()
         source = source.replace("output closure color BSDF = 0)", "output closure color BSDF = 0, output normal N0 = 0)")
         source = source.replace("    normal n = ndfb_tangent_to_world(mu, UVMapName, NormalStrength);",
                                 "    normal n = ndfb_tangent_to_world(mu, UVMapName, NormalStrength);\n"
