@@ -111,7 +111,9 @@ def _table_lookup(tree, image, column, v, slice_index, location):
     _link(tree, v, uv.inputs["Y"])
     tex = tree.nodes.new("ShaderNodeTexImage")
     tex.image = image
-    tex.interpolation = "Linear"   # bilinear in √μ and roughness; the slices are mixed in nodes
+    # Bilinear in √μ and roughness; the slices are mixed in nodes. Where √μ changes fast across a
+    # pixel (silhouettes) EEVEE's MIP-mapping may blend neighbouring texels too: a smooth table.
+    tex.interpolation = "Linear"
     tex.extension = "EXTEND"
     tex.location = (location[0] + 450, location[1])
     tree.links.new(uv.outputs["Vector"], tex.inputs["Vector"])
