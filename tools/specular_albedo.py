@@ -53,15 +53,12 @@ def axes():
     return grid, mu, z
 
 
-def hemispherical_average(values, mu):
-    """2∫ values(μ) μ dμ over μ in [0, 1], values sampled at gauss_legendre()'s nodes."""
-    nodes, weights = np.polynomial.legendre.leggauss(len(mu))
-    return (weights * values * mu).sum(-1)
-
-
-def gauss_legendre(n):
-    """n Gauss-Legendre nodes on [0, 1]."""
-    return 0.5 * (np.polynomial.legendre.leggauss(n)[0] + 1.0)
+def hemispherical_average(values_at):
+    """2∫ f(μ) μ dμ over μ in [0, 1] by AVERAGE_NODES-point Gauss-Legendre; values_at(μ) gives f
+    at an array of μ, along its last axis."""
+    nodes, weights = np.polynomial.legendre.leggauss(AVERAGE_NODES)
+    mu = 0.5 * (nodes + 1.0)
+    return (weights * values_at(mu) * mu).sum(-1)
 
 
 def directional_albedos(r, mu, eta, u1, u2):
@@ -90,11 +87,10 @@ def tabulate():
             albedo[i, k], fresnel = directional_albedos(r, m, eta, u1, u2)
             shape[i, :, k] = np.clip((fresnel - f0) / (1.0 - f0), 0.0, 1.0)
     # F_ss = 2∫F μ dμ per IOR; E_avg = 2∫E μ dμ per roughness (fewer samples: a smooth average).
-    mu_nodes = gauss_legendre(AVERAGE_NODES)
-    f_ss = hemispherical_average(fresnel_dielectric(mu_nodes[None, :], eta[:, None]), mu_nodes)
+    f_ss = hemispherical_average(lambda m: fresnel_dielectric(m[None, :], eta[:, None]))
     u1, u2 = strat2(AVERAGE_SAMPLES, np.random.default_rng(2027))
-    e_avg = np.array([hemispherical_average(np.array([directional_albedos(r, m, eta[:1], u1, u2)[0]
-                                                      for m in mu_nodes]), mu_nodes) for r in roughness])
+    e_avg = np.array([hemispherical_average(lambda m: np.array([directional_albedos(r, c, eta[:1], u1, u2)[0]
+                                                                for c in m])) for r in roughness])
     f_ms = f_ss[None, :] * e_avg[:, None] / (1.0 - f_ss[None, :] * (1.0 - e_avg[:, None]))
     return shape, albedo, f_ms
 
