@@ -30,9 +30,10 @@ import bpy
 from . import blender_compat, lobe_nodes, lod_nodes, material_scan, specular_split
 from .node_builders import TAG, _add_socket, _new_group, _vmath, socket_value
 
-# Shared groups of earlier versions of this add-on (version 2), removed with the last bake using them.
+# Shared groups of earlier versions of this add-on, removed with the last bake using them: version
+# 2's, and the specular split's group that drew Karis's fit of the layer's albedo (until 2026-11-28).
 RETIRED_GROUPS = tuple("NDFB %s v2" % name for name in ("vMF Lobe", "Grazing Roughness", "Level of Detail",
-                                                         "Atlas Taps", "Bilinear"))
+                                                         "Atlas Taps", "Bilinear")) + ("NDFB Specular Split v3",)
 EEVEE_BSDF = "EEVEE BSDF"             # the group's second shader output (EEVEE's own lobes)
 # BakeSettings.cycles_lobes: what the group's BSDF output (Cycles' view) draws.
 WIDENED, NARROWED = "WIDENED", "NARROWED"
@@ -423,7 +424,7 @@ def remove_unused_groups(names):
     used (a material's atlas table, the shared helpers) if nothing else uses those either, and the
     specular layer's table image once no group uses it."""
     shared = [lobe_nodes.LOBE_GROUP, lobe_nodes.GRAZING_GROUP, lod_nodes.LOD_GROUP, lod_nodes.TAPS_GROUP,
-              lod_nodes.BILINEAR_GROUP, specular_split.SPLIT_GROUP, *specular_split.RETIRED_SPLIT_GROUPS, *RETIRED_GROUPS]
+              lod_nodes.BILINEAR_GROUP, specular_split.SPLIT_GROUP, *RETIRED_GROUPS]
     pending = list(dict.fromkeys(names)) + shared
     while pending:
         tree = bpy.data.node_groups.get(pending.pop(0))

@@ -35,7 +35,6 @@ from . import specular_albedo_table as table
 from .node_builders import COLOR, FLOAT, GROUP_VERSION, VECTOR, _find_group, _group_with_io, _link, _math, _vmath
 
 SPLIT_GROUP = "NDFB Specular Layer v%d" % GROUP_VERSION
-RETIRED_SPLIT_GROUPS = ("NDFB Specular Split v%d" % GROUP_VERSION,)   # drew Karis's fit (until 2026-11-28)
 SPLIT_INPUTS = ("Base Color", "Metallic", "IOR", "Specular IOR Level", "Specular Tint", "Roughness")
 # Layers that keep a lobe a whole Principled BSDF (Principled v2 names).
 LAYERED_INPUTS = ("Coat Weight", "Sheen Weight", "Transmission Weight")
