@@ -162,10 +162,9 @@ def study(out, world, sun_lamp, reference_samples, converged_samples, variants, 
 
 
 def main():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(prog="cycles_noise_study.py")
     parser.add_argument("--out", required=True)
-    parser.add_argument("--world", default=demo_build.DEFAULT_WORLD, choices=demo_build.world_names())
+    demo_build.add_world_option(parser)
     parser.add_argument("--sun-lamp", action="store_true")
     parser.add_argument("--reference-samples", type=int, default=512)
     parser.add_argument("--converged-samples", type=int, default=256)
@@ -175,7 +174,7 @@ def main():
     parser.add_argument("--max-lobes", type=int, choices=range(1, 9), default=demo_scene.MAX_LOBES,
                         help="the bakes' maximum lobes (default: the demo's)")
     parser.add_argument("--library")
-    args = parser.parse_args(argv)
+    args = demo_build.script_arguments(parser)
     variants = [v for v in args.variants.split(",") if v]
     unknown = [v for v in variants if v not in VARIANTS]
     if unknown:

@@ -120,6 +120,17 @@ def world_names():
     return sorted(name[:-4] for name in os.listdir(WORLDS) if name.endswith(".exr"))
 
 
+def add_world_option(parser, **kwargs):
+    """--world: one of Blender's studio worlds (world_names()), DEFAULT_WORLD unless given."""
+    parser.add_argument("--world", default=DEFAULT_WORLD, choices=world_names(), **kwargs)
+
+
+def script_arguments(parser):
+    """`parser`'s arguments from what follows "--" on the command line (`blender -b --python
+    script.py -- ...` or `python script.py -- ...`); none without "--"."""
+    return parser.parse_args(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])
+
+
 def _world(scene, name):
     world = bpy.data.worlds.new(name.capitalize())
     world.use_nodes = True

@@ -138,7 +138,6 @@ def run_demo(out, width=320, height=180, reference_samples=256, samples=16, eeve
 
 
 def _arguments():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(prog="blender -b --factory-startup --python examples/demo_scene.py --",
                                      description="Build, bake and render the ndfbake demo scene; measure image error.")
     parser.add_argument("--out", required=True, help="output folder")
@@ -149,12 +148,11 @@ def _arguments():
     parser.add_argument("--eevee-samples", type=int, default=64, help="EEVEE TAA samples (naive, ndfbake)")
     parser.add_argument("--eevee-reference-samples", type=int, default=None,
                         help="EEVEE TAA samples of the supersampled reference (default: 1024 / factor², at least 16)")
-    parser.add_argument("--world", default=demo_build.DEFAULT_WORLD, choices=demo_build.world_names(),
-                        help="Blender's studio world")
+    demo_build.add_world_option(parser, help="Blender's studio world")
     parser.add_argument("--cycles-lobes", choices=("widened", "narrowed"), default="narrowed",
                         help="the bake's Cycles Lobes setting")
     parser.add_argument("--library", help="libndfbake.so (default $NDFBAKE_LIBRARY or build/native/libndfbake.so)")
-    return parser.parse_args(argv)
+    return demo_build.script_arguments(parser)
 
 
 def main():

@@ -27,12 +27,11 @@ CYCLES_SAMPLES = 512
 
 
 def main():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(prog="examples/eevee_exposure_study.py --")
     parser.add_argument("--out", required=True)
-    parser.add_argument("--world", default=demo_build.DEFAULT_WORLD, choices=demo_build.world_names())
+    demo_build.add_world_option(parser)
     parser.add_argument("--samples", type=int, default=64)
-    args = parser.parse_args(argv)
+    args = demo_build.script_arguments(parser)
     out = os.path.abspath(args.out)
     info = demo_build.fresh_scene(out, 128, 72, world=args.world)
     scene = bpy.context.scene

@@ -95,11 +95,10 @@ def closures_material(tilts):
 
 
 def main():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(prog="examples/eevee_grazing_closures.py --")
     parser.add_argument("--sun-elevation", type=float, default=8.0)
     parser.add_argument("--view-elevation", type=float, default=3.0)
-    args = parser.parse_args(argv)
+    args = demo_build.script_arguments(parser)
     scene, plane = build(args.sun_elevation, args.view_elevation)
     print("sun %.1f deg up, view %.1f deg above the plane (Blender %s): mean of the render"
           % (args.sun_elevation, args.view_elevation, bpy.app.version_string))

@@ -80,13 +80,12 @@ def set_normal_strength(material_names, strength):
 
 
 def main():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(prog="examples/eevee_reference_study.py --")
     parser.add_argument("--out", required=True)
-    parser.add_argument("--world", default=demo_build.DEFAULT_WORLD, choices=demo_build.world_names())
+    demo_build.add_world_option(parser)
     parser.add_argument("--width", type=int, default=128)
     parser.add_argument("--height", type=int, default=72)
-    args = parser.parse_args(argv)
+    args = demo_build.script_arguments(parser)
     out = os.path.abspath(args.out)
     info = demo_build.fresh_scene(out, args.width, args.height, world=args.world)
     scene, eevee, materials = bpy.context.scene, demo_build.eevee_engine(), info["materials"]

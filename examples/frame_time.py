@@ -86,7 +86,6 @@ def measure(out, width, height, eevee_samples, samples, lobe_counts, repeats, di
 
 
 def _arguments():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(prog="examples/frame_time.py", description=__doc__.split("\n")[0])
     parser.add_argument("--out", required=True, help="output folder")
     parser.add_argument("--width", type=int, default=320)
@@ -97,7 +96,7 @@ def _arguments():
     parser.add_argument("--repeats", type=int, default=2, help="timed renders per variant (fastest kept)")
     parser.add_argument("--dielectric", action="store_true", help="the materials with Metallic 0 (plain and baked)")
     parser.add_argument("--library", help="libndfbake.so (default $NDFBAKE_LIBRARY or build/native/libndfbake.so)")
-    return parser.parse_args(argv)
+    return demo_build.script_arguments(parser)
 
 
 def main():

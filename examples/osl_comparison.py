@@ -41,7 +41,6 @@ REGIONS = ("ground_far", "spheres_far", "all")
 
 
 def _arguments():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(prog="examples/osl_comparison.py --",
                                      description="The OSL variant vs the stock-node group and naive on the demo scene.")
     parser.add_argument("--out", required=True)
@@ -50,7 +49,7 @@ def _arguments():
     parser.add_argument("--reference-samples", type=int, default=256)
     parser.add_argument("--samples", type=int, default=16)
     parser.add_argument("--library", help="libndfbake.so (default $NDFBAKE_LIBRARY or build/native/libndfbake.so)")
-    return parser.parse_args(argv)
+    return demo_build.script_arguments(parser)
 
 
 def run(out, width, height, reference_samples, samples, log=print):

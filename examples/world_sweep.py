@@ -119,7 +119,6 @@ def format_table(results):
 
 
 def main():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(prog="examples/world_sweep.py --")
     parser.add_argument("--out", required=True)
     parser.add_argument("--worlds", default=",".join(demo_build.world_names()))
@@ -131,7 +130,7 @@ def main():
                         help="Cycles samples of the render whose far ground gives the converged brightness")
     parser.add_argument("--variants", default="",
                         help="';'-separated cycles=C,eevee=C grazing constants to measure besides the add-on's")
-    args = parser.parse_args(argv)
+    args = demo_build.script_arguments(parser)
     variants = {"add-on": None}
     for text in filter(None, args.variants.split(";")):
         variants[text] = {key: float(value) for key, value in (item.split("=") for item in text.split(","))}
