@@ -179,16 +179,17 @@ def main():
     detail = angles_degrees(original, surface)
     below_horizon = detail >= HORIZON_DEGREES
     inside = (coverage == 1) & baked & baked_again
-    away = interior(inside, 1) & ~below_horizon
+    inner = interior(inside, 1)
+    away = inner & ~below_horizon
     error = angles_degrees(original, rendered)
     inverse = angles_degrees(original, back / np.maximum(np.linalg.norm(back, axis=-1, keepdims=True), 1e-12))
     print("texels: %d baked, %d rasterized by ndfbake, %d away from island borders" % (
         int(baked.sum()), int((coverage == 1).sum()), int(away.sum())))
     print("normal map detail (angle to the unmapped normal): mean %.2f deg, max %.2f deg; %d texels at or past "
           "the horizon (>= %.0f deg) left out" % (float(detail[away].mean()), float(detail[away].max()),
-                                                 int((interior(inside, 1) & below_horizon).sum()), HORIZON_DEGREES))
+                                                 int((inner & below_horizon).sum()), HORIZON_DEGREES))
     print("ndfb_tangent_to_object(ndfb_object_to_tangent(O)) vs O: max %.2e deg" % float(inverse[coverage == 1].max()))
-    border = inside & ~interior(inside, 1) & ~below_horizon
+    border = inside & ~inner & ~below_horizon
     print("round trip through Blender's Normal Map node (Cycles): %d texels away from island borders: max %.3f deg, "
           "mean %.4f deg; %d border texels: median %.3f deg, %d over 1 deg (texel centres near an edge that the two "
           "rasterizers give to different triangles, or UVs that overlap)" % (

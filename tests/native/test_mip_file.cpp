@@ -62,14 +62,14 @@ TEST(MipFile, OpenExrRoundUpLevelsAreTheBakesLevels)
     const std::string path = (std::filesystem::path(::testing::TempDir()) / "ndfbake-mip-levels.exr").string();
     for (const auto& [w, h] : std::vector<std::pair<int, int>>{
              {1, 1}, {2, 2}, {64, 64}, {200, 72}, {5, 3}, {1000, 1}, {3, 1024}, {4097, 17}}) {
-        std::vector<std::vector<float>> pixels;
+        // Level l filled with l; each level's buffer is its own vector, so `chain`'s pointers stay valid.
+        std::vector<std::vector<float>> pixels(size_t(level_count(w, h)));
         std::vector<RgbaLevel> chain;
         for (int l = 0; l < level_count(w, h); ++l) {
             const LevelSize size = level_size(w, h, l);
-            pixels.emplace_back(size_t(size.width) * size_t(size.height) * 4, float(l));
+            pixels[size_t(l)].assign(size_t(size.width) * size_t(size.height) * 4, float(l));
+            chain.push_back({size.width, size.height, pixels[size_t(l)].data()});
         }
-        for (int l = 0; l < level_count(w, h); ++l)
-            chain.push_back({level_size(w, h, l).width, level_size(w, h, l).height, pixels[size_t(l)].data()});
         ASSERT_NO_THROW(write_mip_rgba_exr(path, chain, PixelPrecision::half, {})) << w << "x" << h;
         const std::vector<Level> read = read_mip_levels(path);
         ASSERT_EQ(int(read.size()), level_count(w, h)) << w << "x" << h;
