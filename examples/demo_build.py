@@ -63,6 +63,12 @@ def eevee_engine():
     return blender_compat.eevee_engine()
 
 
+def enable_nodes(id_with_nodes):
+    """Gives a material or world its node tree in this Blender (blender_compat; import_addon first)."""
+    from ndfbake import blender_compat
+    return blender_compat.enable_nodes(id_with_nodes)
+
+
 def write_normal_map(path, pattern, size, seed):
     from ndfbake import native
     with native.load().context() as ctx:
@@ -76,7 +82,7 @@ def write_normal_map(path, pattern, size, seed):
 def normal_mapped_material(name, image_path, roughness, color, metallic=1.0):
     """Image Texture (Non-Color, Linear) -> Normal Map (tangent) -> Principled BSDF -> Material Output."""
     material = bpy.data.materials.new(name)
-    material.use_nodes = True
+    enable_nodes(material)
     tree = material.node_tree
     principled = tree.nodes["Principled BSDF"]
     principled.inputs["Base Color"].default_value = tuple(color) + (1.0,)
@@ -133,7 +139,7 @@ def script_arguments(parser):
 
 def _world(scene, name):
     world = bpy.data.worlds.new(name.capitalize())
-    world.use_nodes = True
+    enable_nodes(world)
     tree = world.node_tree
     background = tree.nodes["Background"]
     coords = tree.nodes.new("ShaderNodeTexCoord")
@@ -205,7 +211,7 @@ def build_scene(directory, width=320, height=180, map_size=MAP_SIZE, world=DEFAU
 
     # What a bake must leave alone: a plain material on a rendered object, a normal-mapped one on none.
     plain = bpy.data.materials.new("Plain Paint")
-    plain.use_nodes = True
+    enable_nodes(plain)
     plain.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.05, 0.12, 0.35, 1.0)
     plain.node_tree.nodes["Principled BSDF"].inputs["Roughness"].default_value = 0.45
     bpy.ops.mesh.primitive_cube_add(size=0.5, location=(-1.9, 5.5, 0.25), rotation=(0.0, 0.0, 0.5))

@@ -43,10 +43,10 @@ DISTANCE = 20.0        # metres from the camera to the plane point at the image 
 
 def build(sun_elevation, view_elevation):
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    demo_build.import_addon()  # for demo_build.eevee_engine's version check
+    demo_build.import_addon()  # for demo_build's version checks (eevee_engine, enable_nodes)
     scene = bpy.context.scene
     scene.world = bpy.data.worlds.new("Black")
-    scene.world.use_nodes = True
+    demo_build.enable_nodes(scene.world)
     scene.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
     bpy.ops.mesh.primitive_plane_add(size=20.0 * DISTANCE)
     plane = bpy.context.active_object
@@ -66,7 +66,7 @@ def build(sun_elevation, view_elevation):
 
 def closures_material(tilts):
     material = bpy.data.materials.new("closures")
-    material.use_nodes = True
+    demo_build.enable_nodes(material)
     tree = material.node_tree
     tree.nodes.clear()
     total = None

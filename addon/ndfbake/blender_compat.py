@@ -47,6 +47,27 @@ def new_interface_socket(tree, in_out, socket_type, name):
     return socket
 
 
+def _node_trees_always_used():
+    # 5.0 gives every material and world a node tree and deprecates use_nodes (removal: 6.0).
+    return bpy.app.version >= (5, 0, 0)
+
+
+def uses_nodes(id_with_nodes):
+    """Whether a material (or world) renders from its node tree: use_nodes before 5.0; from 5.0
+    always, where it has one (use_nodes is deprecated there and always True)."""
+    if id_with_nodes.node_tree is None:
+        return False
+    return _node_trees_always_used() or id_with_nodes.use_nodes
+
+
+def enable_nodes(id_with_nodes):
+    """Gives a material (or world) its node tree: use_nodes = True before 5.0, where a new one has
+    none; nothing from 5.0, where it always has one (and use_nodes warns)."""
+    if not _node_trees_always_used():
+        id_with_nodes.use_nodes = True
+    return id_with_nodes.node_tree
+
+
 def eevee_next():
     """True where EEVEE is EEVEE Next (4.2 on), which replaced EEVEE Legacy."""
     return bpy.app.version >= (4, 2, 0)

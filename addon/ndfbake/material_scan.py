@@ -317,7 +317,7 @@ def scan(material):
                                "and writes its lobe textures beside the .blend)" % (
                                    material.name, material.library.filepath)))
         return result
-    if not material.use_nodes or material.node_tree is None:
+    if not blender_compat.uses_nodes(material):
         result.problems.append(Problem("NO_NODES", "material '%s' does not use nodes" % material.name))
         return result
     tree = material.node_tree

@@ -18,6 +18,7 @@ folder name). Not refused: one file through two Image datablocks.
 import contextlib
 import os
 import sys
+import warnings
 
 import bpy
 
@@ -73,11 +74,37 @@ def test_material_without_normal_map():
     def run(directory):
         h.reset_scene()
         material = bpy.data.materials.new("Plain")
-        material.use_nodes = True
+        h.enable_nodes(material)
         h.plane_with(material)
         bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "scene.blend"))
         expect_refused(material, "NO_NORMAL_MAP", ["'Plain'", "Normal Map node"], directory)
     _case(run)
+
+
+def test_material_without_nodes():
+    """Before 5.0 a material can keep a node tree it does not render with (Use Nodes off): refused
+    with NO_NODES. 5.0 always renders a material's tree and deprecates use_nodes: the bake reads
+    nothing deprecated (a DeprecationWarning is an error here) and goes on to the tree itself."""
+    def run(directory):
+        h.reset_scene()
+        material = bpy.data.materials.new("Nodeless")
+        h.enable_nodes(material)
+        h.plane_with(material)
+        if bpy.app.version < (5, 0, 0):
+            material.use_nodes = False
+            bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "scene.blend"))
+            expect_refused(material, "NO_NODES", ["'Nodeless'", "does not use nodes"], directory)
+        else:
+            bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "scene.blend"))
+            expect_refused(material, "NO_NORMAL_MAP", ["'Nodeless'"], directory, wrap=_deprecation_is_error)
+    _case(run)
+
+
+@contextlib.contextmanager
+def _deprecation_is_error():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeprecationWarning)
+        yield
 
 
 def test_missing_image_file():
@@ -354,7 +381,7 @@ def test_non_finite_uvs():
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_linked_material, test_image_with_unsaved_edits, test_muted_normal_map, test_muted_normal_map_link,
-           test_non_finite_uvs, test_material_without_normal_map, test_missing_image_file, test_packed_image,
+           test_non_finite_uvs, test_material_without_normal_map, test_material_without_nodes, test_missing_image_file, test_packed_image,
            test_generated_image, test_srgb_tagged_normal_map, test_linear_normal_map_with_alpha,
            test_object_space_normal_map, test_read_only_output_folder, test_file_in_place_of_the_output_folder,
            test_unsaved_blend, test_corrupt_image_file, test_normal_map_not_from_an_image_texture,

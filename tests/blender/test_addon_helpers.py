@@ -138,10 +138,16 @@ def reset_scene():
         ndfbake.register()
 
 
+def enable_nodes(id_with_nodes):
+    """Gives a material or world its node tree in this Blender (blender_compat)."""
+    from ndfbake import blender_compat
+    return blender_compat.enable_nodes(id_with_nodes)
+
+
 def normal_mapped_material(name, image_path, roughness=0.35, metallic=0.0, colorspace="Non-Color"):
     """Image Texture -> Normal Map (tangent) -> Principled BSDF -> Material Output."""
     material = bpy.data.materials.new(name)
-    material.use_nodes = True
+    enable_nodes(material)
     tree = material.node_tree
     principled = tree.nodes["Principled BSDF"]
     principled.inputs["Roughness"].default_value = roughness

@@ -115,7 +115,7 @@ def test_material_lod_measures_texel_density_and_the_levels_reached():
 
 def _emission_material(name):
     material = bpy.data.materials.new(name)
-    material.use_nodes = True
+    h.enable_nodes(material)
     tree = material.node_tree
     tree.nodes.remove(tree.nodes["Principled BSDF"])
     emission = tree.nodes.new("ShaderNodeEmission")

@@ -62,7 +62,7 @@ def _build_scene(directory):
     scene.camera = bpy.context.active_object
     scene.camera.data.lens = 35.0
     world = bpy.data.worlds.new("Sunset")
-    world.use_nodes = True
+    h.enable_nodes(world)
     environment = world.node_tree.nodes.new("ShaderNodeTexEnvironment")
     environment.image = bpy.data.images.load(WORLD)
     world.node_tree.links.new(environment.outputs["Color"], world.node_tree.nodes["Background"].inputs["Color"])

@@ -65,7 +65,7 @@ def float_image(name):
 def diffuse_material(name):
     """A new material drawing one Diffuse BSDF: (material, that node)."""
     m = bpy.data.materials.new(name)
-    m.use_nodes = True
+    blender_compat.enable_nodes(m)
     nodes = m.node_tree.nodes
     nodes.remove(nodes["Principled BSDF"])
     bsdf = nodes.new("ShaderNodeBsdfDiffuse")
@@ -174,7 +174,7 @@ def main():
 
     # How much the map itself bends the normals: the round trip must do much better than that.
     plain = bpy.data.materials.new("plain")
-    plain.use_nodes = True
+    blender_compat.enable_nodes(plain)
     surface, _ = bake_object_normals(obj, plain, float_image("plain_normals"))
     detail = angles_degrees(original, surface)
     below_horizon = detail >= HORIZON_DEGREES
