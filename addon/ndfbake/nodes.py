@@ -31,9 +31,11 @@ from . import blender_compat, lobe_nodes, lod_nodes, material_scan, specular_spl
 from .node_builders import TAG, _add_socket, _new_group, _vmath, socket_value
 
 # Shared groups of earlier versions of this add-on, removed with the last bake using them: version
-# 2's, and the specular split's group that drew Karis's fit of the layer's albedo (until 2026-11-28).
+# 2's, and the specular split's groups that drew Karis's fit of the layer's albedo and then Cycles'
+# estimate for both engines (until 2026-11-28).
 RETIRED_GROUPS = tuple("NDFB %s v2" % name for name in ("vMF Lobe", "Grazing Roughness", "Level of Detail",
-                                                         "Atlas Taps", "Bilinear")) + ("NDFB Specular Split v3",)
+                                                         "Atlas Taps", "Bilinear")) \
+    + ("NDFB Specular Split v3", "NDFB Specular Layer v3")
 EEVEE_BSDF = "EEVEE BSDF"             # the group's second shader output (EEVEE's own lobes)
 # BakeSettings.cycles_lobes: what the group's BSDF output (Cycles' view) draws.
 WIDENED, NARROWED = "WIDENED", "NARROWED"
@@ -52,8 +54,8 @@ COMPUTED_INPUTS = {"Normal", "Roughness"}
 EMISSION_COLOR = blender_compat.principled_input("Emission")
 EMISSION_INPUTS = {EMISSION_COLOR, "Emission Strength"}
 EMISSION_ALPHA = "Emission Alpha"    # the group's Mix Shader that weights the emission by Alpha
-# The specular split (specular_split.py): its node, the base BSDF, the Mix Shaders of the Alpha (one
-# per output: "<ALPHA_MIX> BSDF", "<ALPHA_MIX> EEVEE BSDF").
+# The specular split (specular_split.py): its node, the base BSDFs and the Mix Shaders of the Alpha
+# (one of each per output: "<BASE_BSDF> BSDF", "<BASE_BSDF> EEVEE BSDF"...).
 SPECULAR_SPLIT, BASE_BSDF, ALPHA_MIX = "Specular Split", "Base BSDF", "Alpha"
 # What a specular-only lobe takes from the group, by kind; the rest of its Principled stays at the
 # default (coat, sheen, subsurface and transmission off).
@@ -191,15 +193,15 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
 
     x_end = 1000 + 200 * count
     emission = _emission(tree, gin, (x_end, -900))
-    base = None
+    bases = {}
     if kind in (specular_split.DIELECTRIC, specular_split.BOTH):
-        base = _base_bsdf(tree, gin, principled, carried, normal_map, moments, names, (x_end, 600))
+        bases = _base_bsdfs(tree, gin, principled, carried, normal_map, moments, names, list(layout), (x_end, 600))
     sums = {}
     for output, lobes in shaders.items():
         y = layout[output][1]
         total = _weighted_sum(tree, lobes, weights, y)
-        if base is not None:
-            total = _add_shader(tree, total, base, (x_end + 200, y))
+        if output in bases:
+            total = _add_shader(tree, total, bases[output], (x_end + 200, y))
         if kind is not None:  # split lobes carry no Alpha: the group mixes the transparency in once
             total = _alpha_over(tree, gin, total, "%s %s" % (ALPHA_MIX, output), (x_end + 400, y))
         sums[output] = _add_shader(tree, total, emission, (x_end + 600, y))
@@ -265,11 +267,13 @@ def _normal_map(tree, gin, normal_map, color, location):
     return nm.outputs["Normal"]
 
 
-def _base_bsdf(tree, gin, principled, carried, normal_map, moments, names, location):
-    """The one Principled BSDF that draws the material's diffuse (and subsurface) beneath the lobes
-    (specular_split): at the texel's mean normal, normalize(Σ_j α_j·r_j + 1e-5·ẑ) (+Z where the
-    moments cancel), the original roughness, no specular of its own, opaque (the group mixes the
-    Alpha in once: _alpha_over)."""
+def _base_bsdfs(tree, gin, principled, carried, normal_map, moments, names, outputs, location):
+    """The Principled BSDFs that draw the material's diffuse (and subsurface) beneath the lobes
+    (specular_split), one per group output in `outputs`, each darkened as its engine darkens a
+    Principled's diffuse under its specular (Cycles' for BSDF, EEVEE Next's for EEVEE BSDF): at the
+    texel's mean normal, normalize(Σ_j α_j·r_j + 1e-5·ẑ) (+Z where the moments cancel), the original
+    roughness, no specular of their own, opaque (the group mixes the Alpha in once: _alpha_over).
+    Returns {output: its base's BSDF}."""
     total = moments[0]
     for k, moment in enumerate(moments[1:], 1):
         total = _vmath(tree, "ADD", total, moment, location=(location[0] - 1200 + 100 * k, location[1] + 300))
@@ -290,23 +294,27 @@ def _base_bsdf(tree, gin, principled, carried, normal_map, moments, names, locat
     # What the original's specular takes out of its diffuse follows its distribution, not the lobes'.
     split.inputs["Multiscatter"].default_value = 1.0 if principled.distribution == "MULTI_GGX" else 0.0
 
-    bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
-    bsdf.name = bsdf.label = BASE_BSDF
-    bsdf.distribution = principled.distribution
-    bsdf.subsurface_method = principled.subsurface_method
-    bsdf.location = location
-    for socket in carried:
-        if socket.name in COMPUTED_INPUTS or socket.name in EMISSION_INPUTS or socket.name in BASE_SET_INPUTS:
-            continue
-        tree.links.new(gin.outputs[socket.name], bsdf.inputs[socket.identifier])
-    tree.links.new(split.outputs["Diffuse Color"], bsdf.inputs["Base Color"])
-    bsdf.inputs["Metallic"].default_value = 0.0
-    bsdf.inputs["Specular IOR Level"].default_value = 0.0
-    bsdf.inputs["Emission Strength"].default_value = 0.0
-    tree.links.new(normal, bsdf.inputs["Normal"])
-    if "Roughness" in gin.outputs:
-        tree.links.new(gin.outputs["Roughness"], bsdf.inputs["Roughness"])
-    return bsdf.outputs["BSDF"]
+    bases = {}
+    for k, output in enumerate(outputs):
+        bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
+        bsdf.name = bsdf.label = "%s %s" % (BASE_BSDF, output)
+        bsdf.distribution = principled.distribution
+        bsdf.subsurface_method = principled.subsurface_method
+        bsdf.location = (location[0], location[1] + 700 * k)
+        for socket in carried:
+            if socket.name in COMPUTED_INPUTS or socket.name in EMISSION_INPUTS or socket.name in BASE_SET_INPUTS:
+                continue
+            tree.links.new(gin.outputs[socket.name], bsdf.inputs[socket.identifier])
+        diffuse = "EEVEE Diffuse Color" if output == EEVEE_BSDF else "Diffuse Color"
+        tree.links.new(split.outputs[diffuse], bsdf.inputs["Base Color"])
+        bsdf.inputs["Metallic"].default_value = 0.0
+        bsdf.inputs["Specular IOR Level"].default_value = 0.0
+        bsdf.inputs["Emission Strength"].default_value = 0.0
+        tree.links.new(normal, bsdf.inputs["Normal"])
+        if "Roughness" in gin.outputs:
+            tree.links.new(gin.outputs["Roughness"], bsdf.inputs["Roughness"])
+        bases[output] = bsdf.outputs["BSDF"]
+    return bases
 
 
 def _emission(tree, gin, location):

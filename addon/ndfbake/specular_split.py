@@ -6,7 +6,7 @@ whole copy of the Principled BSDF also draws the diffuse (and subsurface) under 
 per lobe, though the diffuse of the fine normals is the diffuse of their mean normal to the
 accuracy a Lambertian term has (it is smooth in the normal). So where it may, a bake builds:
 
-- one "base" Principled BSDF at the texel's mean normal (Σ_j α_j·r_j, the first moment of the
+- one "base" Principled BSDF per engine at the texel's mean normal (Σ_j α_j·r_j, the first moment of the
   lobes) with the original roughness, Metallic 0, Specular IOR Level 0 (no specular layer of its
   own), and Base Color = c·(1 − m)·(1 − max over R, G, B of E_s), c the Base Color, m Metallic:
   the diffuse (and subsurface) a Principled v2 draws under its dielectric specular layer, which
@@ -15,8 +15,10 @@ accuracy a Lambertian term has (it is smooth in the normal). So where it may, a 
   Specular Tint, F0 the dielectric's after Specular IOR Level, s where the lobe-averaged Fresnel
   lies between F0 and 1, M = E + F_ms·(1 − E) for Multiscatter GGX (1 for GGX). s, E and F_ms are
   read from one table image (tools/specular_albedo.py computes them; specular_albedo_table.py
-  holds them), two lookups per material. No base at all where Metallic is a constant 1: it would
-  draw nothing.
+  holds them), two lookups per material. That is Cycles' base; EEVEE Next's (the group's EEVEE
+  output) is darkened by EEVEE's own estimate, its split sum F0·t·A + F90·B, read from the same
+  image by a third lookup that only EEVEE's output draws. No base at all where Metallic is a constant 1: it
+  would draw nothing.
 - per lobe, the Principled BSDF's specular only: where Metallic is a constant 1 a conductor
   (Metallic 1: the original's metal lobe), where it is a constant 0 the dielectric layer over a
   black base (no diffuse closure), else both, mixed by Metallic as the Principled mixes them.
@@ -34,7 +36,7 @@ from . import material_scan, node_animation
 from . import specular_albedo_table as table
 from .node_builders import COLOR, FLOAT, GROUP_VERSION, VECTOR, _find_group, _group_with_io, _link, _math, _vmath
 
-SPLIT_GROUP = "NDFB Specular Layer v%d" % GROUP_VERSION
+SPLIT_GROUP = "NDFB Specular Layers v%d" % GROUP_VERSION
 SPLIT_INPUTS = ("Base Color", "Metallic", "IOR", "Specular IOR Level", "Specular Tint", "Roughness")
 # Layers that keep a lobe a whole Principled BSDF (Principled v2 names).
 LAYERED_INPUTS = ("Coat Weight", "Sheen Weight", "Transmission Weight")
@@ -68,22 +70,36 @@ def lobe_kind(holder):
     return BOTH
 
 
+# Each slice of the image is MU_SIZE columns with a copy of its first and last column on either
+# side: EEVEE's Linear lookup at the last column's centre still reads 2.5% of the texel beside it
+# (measured in 5.0: s 0.0249 where Cycles reads 0.0002), which without the copy was the next
+# slice's grazing column (EEVEE's dielectric furnace 2.2% dark at normal incidence).
+SLICE_WIDTH = table.MU_SIZE + 2
+EEVEE_SLICE = table.Z_SIZE   # the slice after the z slices: EEVEE's split sum
+SLICES = table.Z_SIZE + 1
+
+
 def table_pixels():
-    """The table image's RGBA floats, rows bottom up: row i is roughness i/15, and column j·16 + k
-    holds (s(r, z_j, √μ_k), E(r, √μ_k), F_ms(r, z_j), 1): z slices of 16 √μ columns side by side."""
+    """The table image's RGBA floats, rows bottom up: row i is roughness i/15; slice j < Z_SIZE
+    (columns j·SLICE_WIDTH to j·SLICE_WIDTH + MU_SIZE + 1) holds (s(r, z_j, √μ_k), E(r, √μ_k),
+    F_ms(r, z_j), 1) at column j·SLICE_WIDTH + 1 + k, its edge columns repeated beside it, and
+    slice EEVEE_SLICE likewise (A(r, √μ_k), B(r, √μ_k), 0, 1), EEVEE's split sum."""
     r_size, z_size, mu_size = table.ROUGHNESS_SIZE, table.Z_SIZE, table.MU_SIZE
+    columns = [0] + list(range(mu_size)) + [mu_size - 1]
     pixels = []
     for i in range(r_size):
         for j in range(z_size):
-            for k in range(mu_size):
+            for k in columns:
                 pixels += (table.FRESNEL_SHAPE[(i * z_size + j) * mu_size + k], table.GGX_ALBEDO[i * mu_size + k],
                            table.MULTISCATTER_FRESNEL[i * z_size + j], 1.0)
+        for k in columns:
+            pixels += (table.EEVEE_SPLIT_SCALE[i * mu_size + k], table.EEVEE_SPLIT_BIAS[i * mu_size + k], 0.0, 1.0)
     return pixels
 
 
 def table_image():
     """A new packed float image of table_pixels(), Non-Color."""
-    width, height = table.MU_SIZE * table.Z_SIZE, table.ROUGHNESS_SIZE
+    width, height = SLICE_WIDTH * SLICES, table.ROUGHNESS_SIZE
     image = bpy.data.images.new(TABLE_IMAGE, width, height, alpha=True, float_buffer=True)
     image.colorspace_settings.name = "Non-Color"
     image.alpha_mode = "CHANNEL_PACKED"
@@ -100,9 +116,10 @@ def remove_unused_table():
 
 
 def _table_lookup(tree, image, column, v, slice_index, location):
-    """The table's RGB at slice `slice_index`, √μ column `column` (texel units), row coordinate v."""
-    u = _math(tree, "DIVIDE", _math(tree, "MULTIPLY_ADD", slice_index, float(table.MU_SIZE), column,
-                                    location=location), float(table.MU_SIZE * table.Z_SIZE),
+    """The table's RGB at slice `slice_index`, √μ column `column` (texel units from the slice's first
+    data column's left edge), row coordinate v."""
+    u = _math(tree, "DIVIDE", _math(tree, "MULTIPLY_ADD", slice_index, float(SLICE_WIDTH), column,
+                                    location=location), float(SLICE_WIDTH * SLICES),
               location=(location[0] + 150, location[1]))
     uv = tree.nodes.new("ShaderNodeCombineXYZ")
     uv.location = (location[0] + 300, location[1])
@@ -124,14 +141,15 @@ def _table_lookup(tree, image, column, v, slice_index, location):
 
 def specular_split_group():
     """Inputs SPLIT_INPUTS, Multiscatter (1 where the Principled draws Multiscatter GGX, else 0) and
-    Normal (the base's, world space); output Diffuse Color, the base's Base Color."""
+    Normal (the base's, world space); outputs Diffuse Color, the base's Base Color as Cycles
+    darkens it, and EEVEE Diffuse Color, as EEVEE Next does."""
     tree = _find_group(SPLIT_GROUP)
     if tree is not None:
         return tree
     tree, gin, gout = _group_with_io(
         SPLIT_GROUP, [(COLOR, "Base Color"), (FLOAT, "Metallic"), (FLOAT, "IOR"), (FLOAT, "Specular IOR Level"),
                       (COLOR, "Specular Tint"), (FLOAT, "Roughness"), (FLOAT, "Multiscatter"), (VECTOR, "Normal")],
-        [(COLOR, "Diffuse Color")], (-1400, 1500))
+        [(COLOR, "Diffuse Color"), (COLOR, "EEVEE Diffuse Color")], (-1400, 1500))
     metallic = _math(tree, "MINIMUM", _math(tree, "MAXIMUM", gin.outputs["Metallic"], 0.0, location=(-1200, 500)),
                      1.0, location=(-1050, 500))
     dielectric = _math(tree, "SUBTRACT", 1.0, metallic, location=(-900, 500))
@@ -152,8 +170,8 @@ def specular_split_group():
     mu = _math(tree, "MAXIMUM", _vmath(tree, "DOT_PRODUCT", geometry.outputs["Incoming"], gin.outputs["Normal"],
                                        location=(-1050, -400), output=1), 0.0, location=(-900, -400))
     last = float(table.MU_SIZE - 1)
-    column = _math(tree, "MULTIPLY_ADD", _math(tree, "SQRT", mu, location=(-750, -400)), last, 0.5,
-                   location=(-600, -400))
+    column = _math(tree, "MULTIPLY_ADD", _math(tree, "SQRT", mu, location=(-750, -400)), last, 1.5,
+                   location=(-600, -400))  # past the slice's copy of its first column
     rough = _math(tree, "MULTIPLY", gin.outputs["Roughness"], 1.0, location=(-900, -600), clamp=True)
     v = _math(tree, "DIVIDE", _math(tree, "MULTIPLY_ADD", rough, float(table.ROUGHNESS_SIZE - 1), 0.5,
                                     location=(-750, -600)), float(table.ROUGHNESS_SIZE), location=(-600, -600))
@@ -194,5 +212,39 @@ def specular_split_group():
     diffuse = _vmath(tree, "SCALE", gin.outputs["Base Color"],
                      scale=_math(tree, "MULTIPLY", kept, dielectric, location=(2100, -500)), location=(2250, -300))
     tree.links.new(diffuse, gout.inputs["Diffuse Color"])
+    split_sum = _table_lookup(tree, image, column, v, float(EEVEE_SLICE), (-450, -1600))
+    eevee = _eevee_layer_albedo(tree, gin, f0, split_sum["X"], split_sum["Y"], (600, -1600))
+    kept = _math(tree, "SUBTRACT", 1.0, eevee, location=(1950, -1600), clamp=True)
+    diffuse = _vmath(tree, "SCALE", gin.outputs["Base Color"],
+                     scale=_math(tree, "MULTIPLY", kept, dielectric, location=(2100, -1500)), location=(2250, -1400))
+    tree.links.new(diffuse, gout.inputs["EEVEE Diffuse Color"])
     return tree
 
+
+def _eevee_layer_albedo(tree, gin, f0, scale, bias, location):
+    """The largest channel of what EEVEE Next's Principled takes out of its diffuse for the layer
+    (its bsdf_lut): R = F0·t·A + F90·B, F90 = clamp(7.06·√F0) (EEVEE fades F90 out below IOR
+    1.33), and for Multiscatter GGX R / (1 − (1 − E_ss)·F_avg), F_avg = F0·t + (F90 − F0·t)/21.
+    A + B stands in for EEVEE's E_ss (the reflected plus transmitted single-scatter albedo, from a
+    LUT of EEVEE's own): that moves R by a factor within (A + B − E_ss)·F_avg of 1. R grows with t,
+    so the largest channel is the largest t's."""
+    x, y = location
+    tint = tree.nodes.new("ShaderNodeSeparateXYZ")
+    tint.location = (x, y)
+    tree.links.new(gin.outputs["Specular Tint"], tint.inputs["Vector"])
+    strongest = _math(tree, "MAXIMUM", _math(tree, "MAXIMUM", tint.outputs["X"], tint.outputs["Y"],
+                                             location=(x + 150, y)), tint.outputs["Z"], location=(x + 300, y))
+    f0_tinted = _math(tree, "MULTIPLY", f0, strongest, location=(x + 450, y), clamp=True)
+    f90 = _math(tree, "MULTIPLY", _math(tree, "SQRT", f0, location=(x + 300, y - 150)), 2.33 / 0.33,
+                location=(x + 450, y - 150), clamp=True)
+    single = _math(tree, "MULTIPLY_ADD", f0_tinted, scale, _math(tree, "MULTIPLY", f90, bias, location=(x + 600, y - 150)),
+                   location=(x + 750, y - 200))   # F0·t·A + F90·B
+    average = _math(tree, "MULTIPLY_ADD", _math(tree, "SUBTRACT", f90, f0_tinted, location=(x + 600, y - 300)),
+                    1.0 / 21.0, f0_tinted, location=(x + 750, y - 350))
+    albedo = _math(tree, "ADD", scale, bias, location=(x + 600, y - 500))
+    # 1 − (1 − E_ss)·F_avg ≥ 1 − F_avg ≥ 20/21: no division by zero
+    kept = _math(tree, "MULTIPLY_ADD", _math(tree, "SUBTRACT", albedo, 1.0, location=(x + 750, y - 500)), average,
+                 1.0, location=(x + 900, y - 450))
+    multiple = _math(tree, "DIVIDE", single, kept, location=(x + 1050, y - 300))
+    return _math(tree, "MULTIPLY_ADD", _math(tree, "SUBTRACT", multiple, single, location=(x + 1200, y - 300)),
+                 gin.outputs["Multiscatter"], single, location=(x + 1350, y - 200))

@@ -127,6 +127,7 @@ def test_white_furnace_keeps_the_energy_of_the_fine_normals():
 
 FURNACE_ELEVATIONS = (90.0, 45.0, 20.0, 10.0, 5.0, 2.0)  # degrees between the view and the plane
 FURNACE_BOUND = 0.02
+FURNACE_EEVEE_SAMPLES = 4
 # Known misses, held to regression bounds (README, "White furnace"): (material, Principled
 # version) -> (the elevations below which the bound is missed, the regression bound there).
 # Principled v1 (3.x): the lobes' Multiscatter GGX against the original's GGX, which loses more
@@ -143,6 +144,26 @@ def test_flat_map_furnace_at_every_view_angle():
     tinted GGX dielectric of IOR 1.33 and Specular IOR Level 0.7. Cycles, an orthographic camera on
     a large plane, 32² pixels at 64 spp; the means within 2% but where FURNACE_MISSES says
     otherwise."""
+    flat_map_furnace("CYCLES", ("metal", "dielectric", "half metal, alpha 0.5", "tinted GGX dielectric"))
+
+
+def test_flat_map_furnace_in_eevee_next():
+    """The same furnace in EEVEE Next (4.2+), for the materials with a base, which EEVEE's output
+    darkens by EEVEE's own split-sum estimate (specular_split._eevee_layer_albedo): the dielectric,
+    the half metal and the tinted GGX dielectric, within 2% at every angle (5.0: 0.43% at most;
+    with Cycles' estimate instead 2.4% at 5°, and 2.2% at 90° before the table's slices had their
+    edge columns repeated). The metal's lobes alone are EEVEE's own Principled, as the plain
+    material's (1.0000 in 5.0); not drawn again here."""
+    from ndfbake import blender_compat
+    if not blender_compat.eevee_next():
+        print("  skipped: EEVEE Legacy draws Principled v1, whose lobes are whole copies")
+        return
+    flat_map_furnace(blender_compat.eevee_engine(), ("dielectric", "half metal, alpha 0.5", "tinted GGX dielectric"))
+
+
+def flat_map_furnace(engine, kinds):
+    """The furnace of the two tests above in `engine`, for the materials named in `kinds` (those of
+    this Principled version)."""
     from ndfbake import bake
     with h.scratch_dir() as directory:
         h.reset_scene()
@@ -174,34 +195,37 @@ def test_flat_map_furnace_at_every_view_angle():
         camera.data.type = "ORTHO"
         camera.data.ortho_scale = 0.5
         h.uniform_world(scene, "Furnace", (1.0, 1.0, 1.0))
-        h.configure_render(scene, 32, 32, cycles_samples=64)
+        # EEVEE: a uniform sky over a flat plane has nothing for more samples to converge.
+        h.configure_render(scene, 32, 32, cycles_samples=64, eevee_samples=FURNACE_EEVEE_SAMPLES)
 
-        def means(material, label):
+        def means(material):
             plane.data.materials[0] = material
             found = []
             for elevation in FURNACE_ELEVATIONS:
                 e = math.radians(elevation)
                 camera.location = (0.0, -10.0 * math.cos(e), 10.0 * math.sin(e))
                 camera.rotation_euler = (math.pi / 2 - e, 0.0, 0.0)
-                found.append(float(render(scene, "CYCLES", os.path.join(directory, "furnace.exr")).mean()))
+                found.append(float(render(scene, engine, os.path.join(directory, "furnace.exr")).mean()))
             return np.array(found)
 
-        for kind, material in materials.items():
-            plain = means(material, kind + "-plain")
+        for kind in [k for k in kinds if k in materials]:
+            material = materials[kind]
+            plain = means(material)
             result = bake.bake_material(material, bake.BakeSettings(max_lobes=4))
-            baked = means(material, kind + "-baked")
+            baked = means(material)
             ratio = baked / plain
             below, regression = FURNACE_MISSES.get((kind, version), (0.0, FURNACE_BOUND))
             bounds = np.where(np.array(FURNACE_ELEVATIONS) < below, regression, FURNACE_BOUND)
-            print("  %s, Principled v%d (%s): plain %s, baked %s; ratio %s" % (
-                kind, version, result.summary.split(";")[0], np.round(plain, 4), np.round(baked, 4),
+            print("  %s, %s, Principled v%d (%s): plain %s, baked %s; ratio %s" % (
+                engine, kind, version, result.summary.split(";")[0], np.round(plain, 4), np.round(baked, 4),
                 np.round(ratio, 4)))
             h.expect(np.all(np.isfinite(baked)) and np.all(np.abs(ratio - 1.0) < bounds),
-                     "%s: the baked flat map reflects %s of the plain material's furnace at elevations %s"
-                     " (bounds %s)" % (kind, np.round(ratio, 4), FURNACE_ELEVATIONS, bounds))
+                     "%s, %s: the baked flat map reflects %s of the plain material's furnace at elevations %s"
+                     " (bounds %s)" % (engine, kind, np.round(ratio, 4), FURNACE_ELEVATIONS, bounds))
 
 
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_eevee_and_cycles_render_the_baked_material, test_emission_is_drawn_once_as_the_principled_draws_it,
-           test_white_furnace_keeps_the_energy_of_the_fine_normals, test_flat_map_furnace_at_every_view_angle])
+           test_white_furnace_keeps_the_energy_of_the_fine_normals, test_flat_map_furnace_at_every_view_angle,
+           test_flat_map_furnace_in_eevee_next])
