@@ -6,10 +6,10 @@ whole copy of the Principled BSDF also draws the diffuse (and subsurface) under 
 per lobe, though the diffuse of the fine normals is the diffuse of their mean normal to the
 accuracy a Lambertian term has (it is smooth in the normal). So where it may, a bake builds:
 
-- one "base" Principled BSDF per engine at the texel's mean normal (Σ_j α_j·r_j, the first moment of the
-  lobes) with the original roughness, Metallic 0, Specular IOR Level 0 (no specular layer of its
-  own), and Base Color = c·(1 − m)·(1 − max over R, G, B of E_s), c the Base Color, m Metallic:
-  the diffuse (and subsurface) a Principled v2 draws under its dielectric specular layer, which
+- one "base" Principled BSDF per engine at the texel's mean normal (Σ_j α_j·r_j, the first
+  moment of the lobes) with the original roughness, Metallic 0, Specular IOR Level 0 (no specular
+  layer of its own), and Base Color = c·(1 − m)·(1 − max over R, G, B of E_s), c the Base Color,
+  m Metallic: the diffuse (and subsurface) a Principled v2 draws under its dielectric specular layer, which
   takes the layer's directional albedo E_s out of it as Cycles estimates it
   (bsdf_microfacet_estimate_albedo, closure_layering_weight): E_s = mix(F0·t, 1, s)·M, t the
   Specular Tint, F0 the dielectric's after Specular IOR Level, s where the lobe-averaged Fresnel
@@ -17,8 +17,8 @@ accuracy a Lambertian term has (it is smooth in the normal). So where it may, a 
   read from one table image (tools/specular_albedo.py computes them; specular_albedo_table.py
   holds them), two lookups per material. That is Cycles' base; EEVEE Next's (the group's EEVEE
   output) is darkened by EEVEE's own estimate, its split sum F0·t·A + F90·B, read from the same
-  image by a third lookup that only EEVEE's output draws. No base at all where Metallic is a constant 1: it
-  would draw nothing.
+  image by a third lookup that only EEVEE's output draws. No base at all where Metallic is a
+  constant 1: it would draw nothing.
 - per lobe, the Principled BSDF's specular only: where Metallic is a constant 1 a conductor
   (Metallic 1: the original's metal lobe), where it is a constant 0 the dielectric layer over a
   black base (no diffuse closure), else both, mixed by Metallic as the Principled mixes them.
@@ -237,12 +237,13 @@ def _eevee_layer_albedo(tree, gin, f0, scale, bias, location):
     f0_tinted = _math(tree, "MULTIPLY", f0, strongest, location=(x + 450, y), clamp=True)
     f90 = _math(tree, "MULTIPLY", _math(tree, "SQRT", f0, location=(x + 300, y - 150)), 2.33 / 0.33,
                 location=(x + 450, y - 150), clamp=True)
-    single = _math(tree, "MULTIPLY_ADD", f0_tinted, scale, _math(tree, "MULTIPLY", f90, bias, location=(x + 600, y - 150)),
-                   location=(x + 750, y - 200))   # F0·t·A + F90·B
+    # F0·t·A + F90·B
+    single = _math(tree, "MULTIPLY_ADD", f0_tinted, scale,
+                   _math(tree, "MULTIPLY", f90, bias, location=(x + 600, y - 150)), location=(x + 750, y - 200))
     average = _math(tree, "MULTIPLY_ADD", _math(tree, "SUBTRACT", f90, f0_tinted, location=(x + 600, y - 300)),
                     1.0 / 21.0, f0_tinted, location=(x + 750, y - 350))
     albedo = _math(tree, "ADD", scale, bias, location=(x + 600, y - 500))
-    # 1 − (1 − E_ss)·F_avg ≥ 1 − F_avg ≥ 20/21: no division by zero
+    # 1 − (1 − E_ss)·F_avg ≥ E_ss ≥ 0.3 (F_avg ≤ 1; the table's least A + B is 0.31): no division by zero
     kept = _math(tree, "MULTIPLY_ADD", _math(tree, "SUBTRACT", albedo, 1.0, location=(x + 750, y - 500)), average,
                  1.0, location=(x + 900, y - 450))
     multiple = _math(tree, "DIVIDE", single, kept, location=(x + 1050, y - 300))

@@ -158,7 +158,8 @@ def test_flat_map_furnace_in_eevee_next():
     if not blender_compat.eevee_next():
         print("  skipped: EEVEE Legacy draws Principled v1, whose lobes are whole copies")
         return
-    flat_map_furnace(blender_compat.eevee_engine(), ("dielectric", "half metal, alpha 0.5", "tinted GGX dielectric"))
+    flat_map_furnace(blender_compat.eevee_engine(),
+                     ("dielectric", "half metal, alpha 0.5", "tinted GGX dielectric"))
 
 
 def flat_map_furnace(engine, kinds):
