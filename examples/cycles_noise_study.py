@@ -17,10 +17,13 @@ figure, against the reference), noise (16 spp against the converged render), bia
 the reference; it includes the reference's own noise), block (4x4 mean luminance error at 16 spp,
 and of the converged render) and the converged render's mean luminance beside the reference's.
 Variants, each a bake of every material: widened and narrowed (the bake's Cycles Lobes setting:
-the widened lobes, or the ones EEVEE draws, narrowed at grazing views), either with -ggx (the
-lobes' Multiscatter GGX set to GGX).
+the widened lobes, or the ones narrowed at grazing views), either with -ggx (the lobes'
+Multiscatter GGX set to GGX); and flat, no bake: the materials with their normal maps switched off
+(Normal Map Strength 0), whose noise column is what a surface as glossy as the material costs
+in noise without normals finer than a pixel.
 """
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -37,9 +40,9 @@ import demo_render  # noqa: E402
 import image_error  # noqa: E402
 
 SEEDS = (0, 2, 3)
-# The lobe variants (module docstring); all but widened-ggx run by default.
-VARIANTS = ("widened", "narrowed", "widened-ggx", "narrowed-ggx")
-DEFAULT_VARIANTS = tuple(v for v in VARIANTS if v != "widened-ggx")
+# The variants (module docstring); all but widened-ggx and flat run by default.
+VARIANTS = ("widened", "narrowed", "widened-ggx", "narrowed-ggx", "flat")
+DEFAULT_VARIANTS = tuple(v for v in VARIANTS if v not in ("widened-ggx", "flat"))
 REGIONS = ("ground_far", "spheres_far")
 # A sun is the few pixels above SUN_THRESHOLD of the brightest (then the looser fallback); more
 # than SUN_MAX_PIXELS there is no compact sun (an overcast sky, a window-lit studio) to split off.
@@ -115,6 +118,24 @@ def use_variant(scene, variant, max_lobes):
                     node.distribution = "GGX"
 
 
+@contextlib.contextmanager
+def flattened(material_names):
+    """The materials with their Normal Map nodes at Strength 0 (the surface's own normal), restored
+    after: the 16-spp noise that the material's own gloss costs without normals finer than a pixel
+    (lobes drawn wider than that gloss may be less noisy; lobes narrowed back to it at grazing
+    views are not)."""
+    strengths = [(node.inputs["Strength"], node.inputs["Strength"].default_value)
+                 for name in material_names for node in bpy.data.materials[name].node_tree.nodes
+                 if node.bl_idname == "ShaderNodeNormalMap"]
+    for socket, _ in strengths:
+        socket.default_value = 0.0
+    try:
+        yield
+    finally:
+        for socket, value in strengths:
+            socket.default_value = value
+
+
 def study(out, world, sun_lamp, reference_samples, converged_samples, variants, width, height, max_lobes):
     info = demo_build.build_scene(out, width, height, world=world)
     scene = bpy.context.scene
@@ -149,9 +170,13 @@ def study(out, world, sun_lamp, reference_samples, converged_samples, variants, 
                                         row["block_converged"], row["mean"], row["reference_mean"]), flush=True)
 
     measure("naive")
+    if "flat" in variants:
+        with flattened(info["materials"]):
+            measure("flat")
     for variant in variants:
-        use_variant(scene, variant, max_lobes)
-        measure(variant)
+        if variant != "flat":
+            use_variant(scene, variant, max_lobes)
+            measure(variant)
     for row in rows:
         if row["variant"] != "naive":
             naive = next(r for r in rows if r["variant"] == "naive" and r["region"] == row["region"])
