@@ -202,23 +202,33 @@ def specular_split_group():
     # (a float linked to a vector socket is read as (s, s, s))
     layer = _vmath(tree, "SCALE", _vmath(tree, "ADD", tinted, shape, location=(1200, -700)), scale=scale,
                    location=(1350, -700))
-    channels = tree.nodes.new("ShaderNodeSeparateXYZ")
-    channels.location = (1500, -700)
-    tree.links.new(layer, channels.inputs["Vector"])
-    strongest = _math(tree, "MAXIMUM", _math(tree, "MAXIMUM", channels.outputs["X"], channels.outputs["Y"],
-                                             location=(1650, -650)), channels.outputs["Z"], location=(1800, -700))
-    # Diffuse Color = c·(1 − m)·clamp(1 − max E_s) (closure_layering_weight)
-    kept = _math(tree, "SUBTRACT", 1.0, strongest, location=(1950, -700), clamp=True)
-    diffuse = _vmath(tree, "SCALE", gin.outputs["Base Color"],
-                     scale=_math(tree, "MULTIPLY", kept, dielectric, location=(2100, -500)), location=(2250, -300))
-    tree.links.new(diffuse, gout.inputs["Diffuse Color"])
+    _diffuse_under(tree, gin, _largest_channel(tree, layer, (1500, -700)), dielectric, gout.inputs["Diffuse Color"],
+                   (1950, -700))
     split_sum = _table_lookup(tree, image, column, v, float(EEVEE_SLICE), (-450, -1600))
     eevee = _eevee_layer_albedo(tree, gin, f0, split_sum["X"], split_sum["Y"], (600, -1600))
-    kept = _math(tree, "SUBTRACT", 1.0, eevee, location=(1950, -1600), clamp=True)
-    diffuse = _vmath(tree, "SCALE", gin.outputs["Base Color"],
-                     scale=_math(tree, "MULTIPLY", kept, dielectric, location=(2100, -1500)), location=(2250, -1400))
-    tree.links.new(diffuse, gout.inputs["EEVEE Diffuse Color"])
+    _diffuse_under(tree, gin, eevee, dielectric, gout.inputs["EEVEE Diffuse Color"], (1950, -1600))
     return tree
+
+
+def _largest_channel(tree, vector, location):
+    """max(x, y, z) of `vector` (an output socket)."""
+    x, y = location
+    channels = tree.nodes.new("ShaderNodeSeparateXYZ")
+    channels.location = location
+    tree.links.new(vector, channels.inputs["Vector"])
+    return _math(tree, "MAXIMUM", _math(tree, "MAXIMUM", channels.outputs["X"], channels.outputs["Y"],
+                                        location=(x + 150, y + 50)), channels.outputs["Z"], location=(x + 300, y))
+
+
+def _diffuse_under(tree, gin, layer_albedo, dielectric, output, location):
+    """Links c·(1 − m)·clamp(1 − layer_albedo) to `output`: the diffuse under a specular layer that
+    takes out `layer_albedo` (closure_layering_weight), c the Base Color, 1 − m `dielectric`."""
+    x, y = location
+    kept = _math(tree, "SUBTRACT", 1.0, layer_albedo, location=(x, y), clamp=True)
+    diffuse = _vmath(tree, "SCALE", gin.outputs["Base Color"],
+                     scale=_math(tree, "MULTIPLY", kept, dielectric, location=(x + 150, y + 200)),
+                     location=(x + 300, y + 400))
+    tree.links.new(diffuse, output)
 
 
 def _eevee_layer_albedo(tree, gin, f0, scale, bias, location):
@@ -229,12 +239,8 @@ def _eevee_layer_albedo(tree, gin, f0, scale, bias, location):
     LUT of EEVEE's own): that moves R by a factor within (A + B − E_ss)·F_avg of 1. R grows with t,
     so the largest channel is the largest t's."""
     x, y = location
-    tint = tree.nodes.new("ShaderNodeSeparateXYZ")
-    tint.location = (x, y)
-    tree.links.new(gin.outputs["Specular Tint"], tint.inputs["Vector"])
-    strongest = _math(tree, "MAXIMUM", _math(tree, "MAXIMUM", tint.outputs["X"], tint.outputs["Y"],
-                                             location=(x + 150, y)), tint.outputs["Z"], location=(x + 300, y))
-    f0_tinted = _math(tree, "MULTIPLY", f0, strongest, location=(x + 450, y), clamp=True)
+    f0_tinted = _math(tree, "MULTIPLY", f0, _largest_channel(tree, gin.outputs["Specular Tint"], (x, y)),
+                      location=(x + 450, y), clamp=True)
     f90 = _math(tree, "MULTIPLY", _math(tree, "SQRT", f0, location=(x + 300, y - 150)), 2.33 / 0.33,
                 location=(x + 450, y - 150), clamp=True)
     # F0·t·A + F90·B
