@@ -257,8 +257,9 @@ def dump_material(material):
     settings = {}
     for prop in material.bl_rna.properties:
         # session_uid (4.x): an id for this session only, new when the file is opened again.
+        # Deprecated properties (5.0's use_nodes, always True) say nothing and warn when read.
         if prop.type in {"BOOLEAN", "INT", "FLOAT", "STRING", "ENUM"} \
-                and prop.identifier not in ("rna_type", "session_uid"):
+                and prop.identifier not in ("rna_type", "session_uid") and not getattr(prop, "is_deprecated", False):
             settings[prop.identifier] = _value(getattr(material, prop.identifier))
     data["settings"] = settings
     return data

@@ -199,7 +199,7 @@ def _settings(rna_struct, skip=_UNREADABLE):
     values = {}
     for prop in rna_struct.bl_rna.properties:
         if prop.type in {"BOOLEAN", "INT", "FLOAT", "STRING", "ENUM"} and prop.identifier not in skip \
-                and prop.identifier != "rna_type":
+                and prop.identifier != "rna_type" and not getattr(prop, "is_deprecated", False):
             values[prop.identifier] = h._value(getattr(rna_struct, prop.identifier))
     return values
 
