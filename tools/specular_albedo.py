@@ -77,10 +77,10 @@ def directional_albedos(r, mu, eta, u1, u2):
     cos_hv = np.clip((half * view).sum(-1) / np.linalg.norm(half, axis=-1), 0.0, 1.0)
     e = weight.mean()
     e_f = (weight[None, :] * fresnel_dielectric(cos_hv[None, :], eta[:, None])).mean(-1)
-    # EEVEE's GGX has the separable Smith term G1(v)·G1(l): a visible normal's weight is G1(l).
-    separable = np.where(weight > 0.0, 1.0 / (1.0 + lambda_local(max(r * r, 1e-4), np.maximum(light[:, 2:], 1e-7)
-                                                                  * np.array([0.0, 0.0, 1.0])
-                                                                  + light * np.array([1.0, 1.0, 0.0]))), 0.0)
+    # EEVEE's GGX has the separable Smith term G1(v)·G1(l): a visible normal's weight is G1(l)
+    # (the normal is +z, so the light is already in local coordinates; kept above the horizon).
+    above = np.concatenate([light[:, :2], np.maximum(light[:, 2:], 1e-7)], -1)
+    separable = np.where(weight > 0.0, 1.0 / (1.0 + lambda_local(max(r * r, 1e-4), above)), 0.0)
     schlick = (1.0 - cos_hv) ** 5
     return e, e_f / max(e, 1e-8), ((1.0 - schlick) * separable).mean(), (schlick * separable).mean()
 

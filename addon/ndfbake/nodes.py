@@ -291,8 +291,7 @@ def _base_bsdfs(tree, gin, principled, carried, normal_map, moments, names, outp
         if key in names:
             tree.links.new(gin.outputs[key], split.inputs[key])
     tree.links.new(normal, split.inputs["Normal"])
-    # What the original's specular takes out of its diffuse follows its distribution, not the lobes'.
-    split.inputs["Multiscatter"].default_value = 1.0 if principled.distribution == "MULTI_GGX" else 0.0
+    split.inputs["Multiscatter"].default_value = specular_split.multiscatter(principled)
 
     bases = {}
     for k, output in enumerate(outputs):
@@ -305,7 +304,7 @@ def _base_bsdfs(tree, gin, principled, carried, normal_map, moments, names, outp
             if socket.name in COMPUTED_INPUTS or socket.name in EMISSION_INPUTS or socket.name in BASE_SET_INPUTS:
                 continue
             tree.links.new(gin.outputs[socket.name], bsdf.inputs[socket.identifier])
-        diffuse = "EEVEE Diffuse Color" if output == EEVEE_BSDF else "Diffuse Color"
+        diffuse = specular_split.EEVEE_DIFFUSE if output == EEVEE_BSDF else specular_split.CYCLES_DIFFUSE
         tree.links.new(split.outputs[diffuse], bsdf.inputs["Base Color"])
         bsdf.inputs["Metallic"].default_value = 0.0
         bsdf.inputs["Specular IOR Level"].default_value = 0.0

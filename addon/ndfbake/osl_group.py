@@ -178,7 +178,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     inputs["UVMapName"].default_value = normal_map.uv_map
     inputs["Narrowing"].default_value = nodes.grazing_narrowing("BSDF", cycles_lobes)
     inputs["distribution"].default_value = "multi_ggx" if principled.distribution in ("GGX", "MULTI_GGX") else "ggx"
-    inputs["Multiscatter"].default_value = 1 if principled.distribution == "MULTI_GGX" else 0
+    inputs["Multiscatter"].default_value = specular_split.multiscatter(principled)
 
     # The texture coordinate the original image read, with its ray differentials (connected).
     if "Vector" in gin.outputs:

@@ -40,6 +40,8 @@ SPLIT_GROUP = "NDFB Specular Layers v%d" % GROUP_VERSION
 SPLIT_INPUTS = ("Base Color", "Metallic", "IOR", "Specular IOR Level", "Specular Tint", "Roughness")
 # Layers that keep a lobe a whole Principled BSDF (Principled v2 names).
 LAYERED_INPUTS = ("Coat Weight", "Sheen Weight", "Transmission Weight")
+# The group's outputs: the base's Base Color as Cycles darkens it, and as EEVEE Next does.
+CYCLES_DIFFUSE, EEVEE_DIFFUSE = "Diffuse Color", "EEVEE Diffuse Color"
 TABLE_IMAGE = "NDFB Specular Layer Table"
 TABLE_KEY = "ndfbake specular layer table"   # the image's ID property: what remove_unused_table removes
 
@@ -54,6 +56,12 @@ def may_split(principled, holder):
 
 
 CONDUCTOR, DIELECTRIC, BOTH = "CONDUCTOR", "DIELECTRIC", "BOTH"
+
+
+def multiscatter(principled):
+    """The group's Multiscatter input for `principled`: 1 where it draws Multiscatter GGX. What its
+    specular takes out of its diffuse follows its own distribution, not the lobes'."""
+    return 1 if principled.distribution == "MULTI_GGX" else 0
 
 
 def lobe_kind(holder):
@@ -141,15 +149,14 @@ def _table_lookup(tree, image, column, v, slice_index, location):
 
 def specular_split_group():
     """Inputs SPLIT_INPUTS, Multiscatter (1 where the Principled draws Multiscatter GGX, else 0) and
-    Normal (the base's, world space); outputs Diffuse Color, the base's Base Color as Cycles
-    darkens it, and EEVEE Diffuse Color, as EEVEE Next does."""
+    Normal (the base's, world space); outputs CYCLES_DIFFUSE and EEVEE_DIFFUSE."""
     tree = _find_group(SPLIT_GROUP)
     if tree is not None:
         return tree
     tree, gin, gout = _group_with_io(
         SPLIT_GROUP, [(COLOR, "Base Color"), (FLOAT, "Metallic"), (FLOAT, "IOR"), (FLOAT, "Specular IOR Level"),
                       (COLOR, "Specular Tint"), (FLOAT, "Roughness"), (FLOAT, "Multiscatter"), (VECTOR, "Normal")],
-        [(COLOR, "Diffuse Color"), (COLOR, "EEVEE Diffuse Color")], (-1400, 1500))
+        [(COLOR, CYCLES_DIFFUSE), (COLOR, EEVEE_DIFFUSE)], (-1400, 1500))
     metallic = _math(tree, "MINIMUM", _math(tree, "MAXIMUM", gin.outputs["Metallic"], 0.0, location=(-1200, 500)),
                      1.0, location=(-1050, 500))
     dielectric = _math(tree, "SUBTRACT", 1.0, metallic, location=(-900, 500))
@@ -202,11 +209,11 @@ def specular_split_group():
     # (a float linked to a vector socket is read as (s, s, s))
     layer = _vmath(tree, "SCALE", _vmath(tree, "ADD", tinted, shape, location=(1200, -700)), scale=scale,
                    location=(1350, -700))
-    _diffuse_under(tree, gin, _largest_channel(tree, layer, (1500, -700)), dielectric, gout.inputs["Diffuse Color"],
+    _diffuse_under(tree, gin, _largest_channel(tree, layer, (1500, -700)), dielectric, gout.inputs[CYCLES_DIFFUSE],
                    (1950, -700))
     split_sum = _table_lookup(tree, image, column, v, float(EEVEE_SLICE), (-450, -1600))
     eevee = _eevee_layer_albedo(tree, gin, f0, split_sum["X"], split_sum["Y"], (600, -1600))
-    _diffuse_under(tree, gin, eevee, dielectric, gout.inputs["EEVEE Diffuse Color"], (1950, -1600))
+    _diffuse_under(tree, gin, eevee, dielectric, gout.inputs[EEVEE_DIFFUSE], (1950, -1600))
     return tree
 
 
