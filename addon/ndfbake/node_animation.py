@@ -121,10 +121,27 @@ def copy_fcurve(fcurves, source, data_path):
     for modifier in source.modifiers:
         new = copy.modifiers.new(modifier.type)
         _copy_properties(modifier, new, skip=("type", "active"))
-        for point in getattr(modifier, "control_points", ()):  # an Envelope's
-            added = new.control_points.add(point.frame)
-            added.min, added.max = point.min, point.max
+        if modifier.type == "ENVELOPE":
+            _copy_envelope_points(modifier.control_points, new.control_points)
     copy.update()
+
+
+def _copy_envelope_points(source, target):
+    """An Envelope's control points, with their bounds. The bounds are written with foreach_set:
+    assigning a point's min or max runs Blender's F-Modifier update on the point, which reads an
+    F-Modifier's fields past the point's memory (to 5.0 at least) and crashes now and then."""
+    count = len(source)
+    frames, lows, highs = ([0.0] * count for _ in range(3))
+    source.foreach_get("frame", frames)
+    source.foreach_get("min", lows)
+    source.foreach_get("max", highs)
+    for frame in frames:
+        target.add(frame)
+    bounds = dict(zip(frames, zip(lows, highs)))
+    added = [0.0] * count
+    target.foreach_get("frame", added)  # add() keeps the points in frame order
+    target.foreach_set("min", [bounds[frame][0] for frame in added])
+    target.foreach_set("max", [bounds[frame][1] for frame in added])
 
 
 def _driver_sets(material_tree):

@@ -255,11 +255,23 @@ def test_nla_strips_and_driver_variables_follow_the_inputs():
 def _curve_state(fcurve):
     return (fcurve.data_path, fcurve.mute, fcurve.lock, fcurve.hide, fcurve.extrapolation,
             [(tuple(k.co), k.type, k.interpolation) for k in fcurve.keyframe_points],
-            [(m.type, len(getattr(m, "control_points", ()))) for m in fcurve.modifiers])
+            [(m.type, _envelope_points(m)) for m in fcurve.modifiers])
+
+
+def _envelope_points(modifier):
+    """An Envelope's control points as (frame, min, max), read without touching a point (Blender's
+    update on a point's bounds reads past it: node_animation._copy_envelope_points)."""
+    points = getattr(modifier, "control_points", ())
+    columns = []
+    for name in ("frame", "min", "max"):
+        values = [0.0] * len(points)
+        points.foreach_get(name, values)
+        columns.append(values)
+    return list(zip(*columns))
 
 
 def test_curve_settings_and_deletions_on_the_node_survive():
-    """A muted, locked, hidden curve with a Breakdown key and an Envelope point is copied with all
+    """A muted, locked, hidden curve with a Breakdown key and two Envelope points is copied with all
     of that (muted on the node too), and comes back the same on Revert; a driver the user removed
     on the group node stays removed on the Principled."""
     from ndfbake import bake
@@ -270,7 +282,11 @@ def test_curve_settings_and_deletions_on_the_node_survive():
         curve = h.tree_fcurves(tree)[0]
         curve.mute = curve.lock = curve.hide = True
         curve.keyframe_points[1].type = "BREAKDOWN"
-        curve.modifiers.new("ENVELOPE").control_points.add(5)
+        points = curve.modifiers.new("ENVELOPE").control_points
+        for frame in (9, 5):
+            points.add(frame)
+        points.foreach_set("min", (-0.5, -2.0))
+        points.foreach_set("max", (0.25, 3.0))
         strength.default_value = 1.0
         principled.inputs["Metallic"].driver_add("default_value").driver.expression = "0.25"
         before = _curve_state(curve)

@@ -8,6 +8,7 @@ the zip path instead. Not a test itself (ctest runs the files it lists).
 """
 import atexit
 import contextlib
+import faulthandler
 import os
 import shutil
 import subprocess
@@ -20,6 +21,9 @@ import bpy
 import numpy as np
 
 sys.dont_write_bytecode = True  # no __pycache__ in the source tree (addon/, tests/blender/)
+# A crash inside Blender prints the Python stack of every thread to the test's log (ctest keeps
+# it); Blender's own crash report goes to a file in /tmp, which CI does not keep.
+faulthandler.enable(all_threads=True)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.normpath(os.path.join(HERE, "..", ".."))
