@@ -449,7 +449,11 @@ def test_texel_density_counts_only_the_material_faces_and_the_render_uv_map():
         mesh = bpy.data.meshes.new("Two")
         mesh.from_pydata([(-2, -1, 0), (0, -1, 0), (0, 1, 0), (-2, 1, 0), (2, -1, 0), (2, 1, 0)], [],
                          [(0, 1, 2, 3), (1, 4, 5, 2)])
-        render_uv, edit_uv = mesh.uv_layers.new(name="Render"), mesh.uv_layers.new(name="Edit")
+        for name in ("Render", "Edit"):
+            mesh.uv_layers.new(name=name)
+        # Looked up once both exist: adding a layer may move the others (a reference taken before
+        # reads freed memory; valgrind showed it in test_tangents).
+        render_uv, edit_uv = mesh.uv_layers["Render"], mesh.uv_layers["Edit"]
         square = [(0, 0), (1, 0), (1, 1), (0, 1)]
         for face, scale in ((0, 1.0), (1, 10.0)):
             for corner, loop in enumerate(mesh.polygons[face].loop_indices):

@@ -397,16 +397,10 @@ def main():
             print("  (missing %s)" % rel)
             continue
         for k, me in enumerate(import_model(path)):
-            for layer in me.uv_layers:
-                try:
-                    found = me.uv_layers.get(layer.name) == layer
-                except UnicodeDecodeError:
-                    found = False
-                if not found:
-                    print("  (skipped a UV layer of %s: Blender cannot look it up by its name)" % rel)
-                    continue
-                compare(lib, me, "%s[%d] uv '%s'" % (os.path.basename(rel), k, layer.name)[:46], totals,
-                        uv_layer=layer.name)
+            # Names first: calc_tangents adds loop layers, which moves the UV layers in memory, so a
+            # UV layer (or the collection's iterator) kept across compare() reads freed memory.
+            for name in [layer.name for layer in me.uv_layers]:
+                compare(lib, me, "%s[%d] uv '%s'" % (os.path.basename(rel), k, name)[:46], totals, uv_layer=name)
                 imported += 1
 
     print("compared %d meshes, %d loops: signs on all %d, tangents on %d (%d on degenerate faces skipped, of which "
