@@ -83,8 +83,8 @@ def one_tap_a_level():
 
 
 def no_atlas_sampling():
-    """Lobe texel (0.25, 0.05·u, 0.05·v; 0.2375): a weight of 1/4 about a normal near the
-    vertical that varies over the surface, so that nothing downstream is constant."""
+    """Lobe texel (0.25, 0.05·u, 0.05·v; 0.2375): a weight of 1/4 about a mean normal that
+    varies with the UV, so that nothing downstream folds to a constant."""
     for tree in _groups():
         coordinates = tree.nodes.new("ShaderNodeTexCoord")
         separate = tree.nodes.new("ShaderNodeSeparateXYZ")
