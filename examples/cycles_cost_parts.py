@@ -38,15 +38,20 @@ CONSTANT_LEVEL = 2.0
 
 
 def _groups():
+    """The material groups that sample MIP atlases."""
     from ndfbake import lod_nodes
-    return [g for g in bpy.data.node_groups if g.nodes.get(lod_nodes.ATLAS_LOOKUP % 0) is not None]
+    return [g for g in bpy.data.node_groups if lod_nodes.atlas_table(g) is not None]
+
+
+def _set_input(tree, socket, value):
+    for link in list(socket.links):
+        tree.links.remove(link)
+    socket.default_value = value
 
 
 def _unlink_to_constant(tree, output, value):
-    for link in list(output.links):
-        socket = link.to_socket
-        tree.links.remove(link)
-        socket.default_value = value
+    for socket in [link.to_socket for link in output.links]:
+        _set_input(tree, socket, value)
 
 
 def constant_table():
@@ -77,57 +82,41 @@ def one_tap_a_level():
         for node in tree.nodes:
             if node.bl_idname == "ShaderNodeGroup" and node.node_tree.name == lod_nodes.BILINEAR_GROUP:
                 for key in ("Fx", "Fy"):
-                    for link in list(node.inputs[key].links):
-                        tree.links.remove(link)
-                    node.inputs[key].default_value = 0.0
+                    _set_input(tree, node.inputs[key], 0.0)
 
 
 def no_atlas_sampling():
     """Lobe texel (0.25, 0.05·u, 0.05·v; 0.2375): a weight of 1/4 about a mean normal that
     varies with the UV, so that nothing downstream folds to a constant."""
+    from ndfbake.node_builders import _math
     for tree in _groups():
-        coordinates = tree.nodes.new("ShaderNodeTexCoord")
         separate = tree.nodes.new("ShaderNodeSeparateXYZ")
-        tree.links.new(coordinates.outputs["UV"], separate.inputs[0])
-        combine = tree.nodes.new("ShaderNodeCombineXYZ")
-        combine.inputs["X"].default_value = 0.25
+        tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["UV"], separate.inputs[0])
+        texel = tree.nodes.new("ShaderNodeCombineXYZ")
+        texel.inputs["X"].default_value = 0.25
         for source, target in (("X", "Y"), ("Y", "Z")):
-            scale = tree.nodes.new("ShaderNodeMath")
-            scale.operation = "MULTIPLY"
-            scale.inputs[1].default_value = 0.05
-            tree.links.new(separate.outputs[source], scale.inputs[0])
-            tree.links.new(scale.outputs[0], combine.inputs[target])
+            tree.links.new(_math(tree, "MULTIPLY", separate.outputs[source], 0.05), texel.inputs[target])
         for node in tree.nodes:
             if node.name.startswith("Decode "):
-                for link in list(node.inputs["Lobe"].links) + list(node.inputs["Lobe Z"].links):
+                _set_input(tree, node.inputs["Lobe Z"], 0.25 * 0.95)
+                for link in list(node.inputs["Lobe"].links):
                     tree.links.remove(link)
-                tree.links.new(combine.outputs[0], node.inputs["Lobe"])
-                node.inputs["Lobe Z"].default_value = 0.25 * 0.95
-
-
-def _by_identifier(sockets, identifier):
-    return next(socket for socket in sockets if socket.identifier == identifier)
+                tree.links.new(texel.outputs[0], node.inputs["Lobe"])
 
 
 def _nudged(tree, socket, nudges):
     """`socket`'s value moved by a relative 1e-6: a copy that reads it is no duplicate Cycles
     merges (it merges nodes of equal inputs), and reads the same texels."""
+    from ndfbake.node_builders import _math, _vmath
     if socket not in nudges:
-        if socket.type == "VECTOR":
-            node = tree.nodes.new("ShaderNodeVectorMath")
-            node.operation = "ADD"
-            node.inputs[1].default_value = (1e-7, 0.0, 0.0)
-        else:
-            node = tree.nodes.new("ShaderNodeMath")
-            node.operation = "MULTIPLY"
-            node.inputs[1].default_value = 1.0 + 1e-6
-        tree.links.new(socket, node.inputs[0])
-        nudges[socket] = node.outputs[0]
+        nudges[socket] = (_vmath(tree, "ADD", socket, (1e-7, 0.0, 0.0)) if socket.type == "VECTOR"
+                          else _math(tree, "MULTIPLY", socket, 1.0 + 1e-6))
     return nudges[socket]
 
 
 def _copy_upstream(tree, node, shared, copies, nudges):
     """A copy of `node` and of every node it reads from, up to the `shared` ones (read nudged)."""
+    from ndfbake.group_node import _socket_by_identifier
     if node in copies:
         return copies[node]
     copy = tree.nodes.new(node.bl_idname)
@@ -145,8 +134,8 @@ def _copy_upstream(tree, node, shared, copies, nudges):
             if link.from_node in shared:
                 source = _nudged(tree, link.from_socket, nudges)
             else:
-                source = _by_identifier(_copy_upstream(tree, link.from_node, shared, copies, nudges).outputs,
-                                        link.from_socket.identifier)
+                source = _socket_by_identifier(_copy_upstream(tree, link.from_node, shared, copies, nudges).outputs,
+                                               link.from_socket.identifier)
             tree.links.new(source, copied)
     return copy
 
@@ -168,6 +157,8 @@ def _sampling_twice(lookups_only):
     their own tap addresses and bilinear weights but share the level of detail and the atlas
     tables; else everything from the group's inputs and UV is computed twice."""
     from ndfbake import lod_nodes
+    from ndfbake.group_node import _socket_by_identifier
+    from ndfbake.node_builders import _mix
     for tree in _groups():
         taps = [n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup" and n.node_tree.name == lod_nodes.TAPS_GROUP]
         if lookups_only:
@@ -179,13 +170,8 @@ def _sampling_twice(lookups_only):
             for key, data_type in (("Lobe", "VECTOR"), ("Lobe Z", "FLOAT")):
                 link = decode.inputs[key].links[0]
                 twin = _copy_upstream(tree, link.from_node, shared, copies, nudges)
-                mix = tree.nodes.new("ShaderNodeMix")
-                mix.data_type, mix.clamp_factor = data_type, False
-                first = {"FLOAT": 2, "VECTOR": 4}[data_type]
-                mix.inputs[0].default_value = 1e-6
-                tree.links.new(link.from_socket, mix.inputs[first])
-                tree.links.new(_by_identifier(twin.outputs, link.from_socket.identifier), mix.inputs[first + 1])
-                tree.links.new(mix.outputs[{"FLOAT": 0, "VECTOR": 1}[data_type]], decode.inputs[key])
+                second = _socket_by_identifier(twin.outputs, link.from_socket.identifier)
+                tree.links.new(_mix(tree, data_type, 1e-6, link.from_socket, second, (0, 0)), decode.inputs[key])
 
 
 def lookups_twice():
