@@ -352,10 +352,13 @@ def finish(job):
                     tree.nodes[normal_map_name], tree.nodes[texture_name], images, job.out_dir, slots, atlas,
                     job.lod, current=current, cycles_lobes=job.settings.cycles_lobes))
                 continue
+            # Where EEVEE draws an output of its own, Cycles' lobes read the atlas with fewer lookups.
+            cycles_only = group_node.eevee_draws_own_output(tree, tree.nodes[principled_name],
+                                                           replacing.get(principled_name))
             groups.append(nodes.build_material_group(
                 nodes.material_group_name(material.name), tree.nodes[principled_name], tree.nodes[normal_map_name],
                 tree.nodes[texture_name], images, atlas, job.lod, current=current,
-                cycles_lobes=job.settings.cycles_lobes))
+                cycles_lobes=job.settings.cycles_lobes, cycles_only=cycles_only))
         for (principled_name, normal_map_name, texture_name), group in zip(job.targets, groups):
             principled = tree.nodes[principled_name]
             normal_map = tree.nodes[normal_map_name]

@@ -210,11 +210,8 @@ def add_eevee_output(material_tree, node, bypassed):
     user's, and both engines draw the group's BSDF. Returns the new
     node's name, or ""; on an error, removes what it added."""
     nodes = material_tree.nodes
-    if len(bypassed) != 1 or any(n.bl_idname == "ShaderNodeOutputMaterial" and n.target == "EEVEE" for n in nodes):
-        return ""
-    output = nodes.get(bypassed[0][0])
-    if output is None or output.bl_idname != "ShaderNodeOutputMaterial" or output.target != "ALL" \
-            or not output.is_active_output or bypassed[0][1] != "Surface":
+    output = _eevee_output_beside(material_tree, bypassed)
+    if output is None:
         return ""
     eevee = nodes.new("ShaderNodeOutputMaterial")
     try:
@@ -234,6 +231,36 @@ def add_eevee_output(material_tree, node, bypassed):
         nodes.remove(eevee)
         raise
     return eevee.name
+
+
+def _eevee_output_beside(material_tree, bypassed):
+    """The Material Output that add_eevee_output puts an EEVEE output beside, for a group node that
+    takes the `bypassed` links: the active target-All output, where it is their one destination
+    (its Surface) and the material has no target-EEVEE output; else None."""
+    if len(bypassed) != 1 or any(n.bl_idname == "ShaderNodeOutputMaterial" and n.target == "EEVEE"
+                                 for n in material_tree.nodes):
+        return None
+    output = material_tree.nodes.get(bypassed[0][0])
+    if output is None or output.bl_idname != "ShaderNodeOutputMaterial" or output.target != "ALL" \
+            or not output.is_active_output or bypassed[0][1] != "Surface":
+        return None
+    return output
+
+
+def eevee_draws_own_output(material_tree, principled, replacing=None):
+    """Whether EEVEE will draw the group's EEVEE BSDF and never its BSDF output once a bake puts
+    its group node in: for a first bake, where insert_group_node adds an EEVEE output for the
+    links leaving `principled`; for a re-bake, where `replacing`, the group node it replaces (a
+    material_scan target), has its EEVEE output and that output still draws its EEVEE BSDF."""
+    if replacing is None:
+        links = [(link.to_node.name, link.to_socket.identifier, bool(link.is_muted))
+                 for link in principled.outputs["BSDF"].links]
+        return _eevee_output_beside(material_tree, links) is not None
+    eevee = replacing.eevee_output
+    if eevee is None or not eevee.inputs["Surface"].is_linked:
+        return False
+    link = eevee.inputs["Surface"].links[0]
+    return link.from_node == replacing.group_node and link.from_socket.name == EEVEE_BSDF
 
 
 def group_node_name(material_tree, node, keys=()):

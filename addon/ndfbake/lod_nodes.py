@@ -1,18 +1,22 @@
 """Level of detail in shader nodes: which texel of which MIP level a pixel reads. Shared groups
-("NDFB Level of Detail", "NDFB Atlas Taps", "NDFB Bilinear"), a material's atlas table, the lookups a material's group
-makes, and the drivers that keep the footprint's camera terms live. The footprint itself is
-scene_lod.py's; nodes.py calls these while it assembles a group.
+("NDFB Level of Detail", "NDFB Atlas Taps", "NDFB Atlas Point", "NDFB Bilinear"), a material's
+atlas table, the lookups a material's group makes, and the drivers that keep the footprint's
+camera terms live. The footprint itself is scene_lod.py's; nodes.py calls these while it
+assembles a group.
 
 Two ways to get the texel a pixel needs:
 - level of detail from the scene (AtlasLayout + scene_lod.LodPlan, the default): lobe j's MIP atlas
   (`atlas_lobej.exr`, every fitted level framed in one image) is sampled at the level the
-  "NDFB Level of Detail" group computes from the view distance and angle (scene_lod.py), with
-  bilinear filtering done in nodes from four Closest lookups ("NDFB Atlas Taps", "NDFB
-  Bilinear") in each of the two levels around it, blended. Both engines; Cycles has no MIP levels.
-  Not one Linear lookup a level: EEVEE MIP-maps Linear images by their screen derivatives, which
-  jump where a tiled texture wraps (fract), so at every tile seam it read the atlas's coarsest
-  levels, blends of unrelated frames: dark lines on the demo's ground, dots on its spheres
-  (Blender 5.0, 2026-11-28; Cycles, which does not MIP-map, rendered it as the taps do).
+  "NDFB Level of Detail" group computes from the view distance and angle (scene_lod.py), in each
+  of the two levels around it, blended. Two ways to filter inside a level, the same texels:
+  - four Closest lookups ("NDFB Atlas Taps") weighted in nodes ("NDFB Bilinear"), which both
+    engines draw alike. EEVEE needs these: it MIP-maps Linear images by their screen derivatives,
+    which jump where a tiled texture wraps (fract), so at every tile seam one Linear lookup read
+    the atlas's coarsest levels, blends of unrelated frames: dark lines on the demo's ground, dots
+    on its spheres (Blender 5.0, 2026-11-28).
+  - one Linear lookup ("NDFB Atlas Point"), which the level's one-texel frame makes exact; for
+    Cycles alone (no MIP levels of its own), where EEVEE draws an output of its own
+    (nodes.build_material_group's cycles_only). Three lookups fewer a level, a lobe.
 - level 0 filtered by the renderer (`level00_lobej.exr`, Linear): EEVEE MIP-maps it itself;
   Cycles only averages its samples over the pixel.
 """
@@ -23,6 +27,7 @@ from .node_builders import COLOR, FLOAT, GROUP_VERSION, VECTOR, _find_group, _gr
 
 LOD_GROUP = "NDFB Level of Detail v%d" % GROUP_VERSION
 TAPS_GROUP = "NDFB Atlas Taps v%d" % GROUP_VERSION
+POINT_GROUP = "NDFB Atlas Point v%d" % GROUP_VERSION
 BILINEAR_GROUP = "NDFB Bilinear v%d" % GROUP_VERSION
 TAP_CORNERS = ("00", "10", "01", "11")  # x then y offset of a bilinear tap
 LOD_INPUTS = ("Texels per Unit", "Pixel Angle", "Pixel Size")
@@ -71,53 +76,93 @@ def level_of_detail_group():
     return tree
 
 
+# Inputs of the groups that address one level of an atlas: the UV, the level's frame X, Y (top-left,
+# rows counted from the top) and size W, H (atlas_table_group), the atlas size, and Repeat (1: the
+# texture tiles, 0: it clamps).
+LEVEL_ADDRESS_INPUTS = [(VECTOR, "UV")] + [(FLOAT, n) for n in ("X", "Y", "W", "H", "Atlas Width", "Atlas Height",
+                                                                "Repeat")]
+
+
+def _level_texel(tree, gin, value, size, y):
+    """The position in texels, from the level's first texel, of texture coordinate `value` along
+    an axis of `size` texels: wrapped into the level (fract) or clamped to it, as Repeat says."""
+    wrapped = _mix(tree, "FLOAT", gin.outputs["Repeat"], _math(tree, "MINIMUM", _math(
+        tree, "MAXIMUM", value, 0.0, location=(-850, y)), 1.0, location=(-700, y)),
+        _math(tree, "FRACT", value, location=(-700, y - 100)), location=(-550, y))
+    return _math(tree, "MULTIPLY", wrapped, size, location=(-400, y))
+
+
+def _level_origin(tree, gin):
+    """Where the level's texels start in the atlas, in texels from its left and bottom edges:
+    column X + 1, row Atlas Height − 1 − Y − H (the frame's border is one texel)."""
+    column = _math(tree, "ADD", gin.outputs["X"], 1.0, location=(-100, 400))
+    row = _math(tree, "SUBTRACT", _math(tree, "SUBTRACT", _math(tree, "SUBTRACT", gin.outputs["Atlas Height"], 1.0,
+                                                                location=(-250, -300)),
+                                        gin.outputs["Y"], location=(-100, -300)),
+                gin.outputs["H"], location=(50, -300))
+    return column, row
+
+
+def _atlas_uv(tree, column, row, gin, location):
+    """The atlas UV of a position (column, row) in texels."""
+    comb = tree.nodes.new("ShaderNodeCombineXYZ")
+    comb.location = location
+    tree.links.new(_math(tree, "DIVIDE", column, gin.outputs["Atlas Width"], location=(location[0] - 200, location[1])),
+                   comb.inputs["X"])
+    tree.links.new(_math(tree, "DIVIDE", row, gin.outputs["Atlas Height"],
+                         location=(location[0] - 200, location[1] - 100)), comb.inputs["Y"])
+    return comb.outputs[0]
+
+
 def atlas_taps_group():
     """The four point lookups of bilinear filtering inside one level of a MIP atlas (native
-    bake/lobe_atlas.h; tests/native/test_lobe_atlas.cpp checks this addressing): inputs UV, the
-    level's frame X, Y (top-left, rows counted from the top) and size W, H, the atlas size, and
-    Repeat (1: the texture tiles, 0: it clamps); outputs UV 00/10/01/11 and the fractions Fx, Fy."""
+    bake/lobe_atlas.h; tests/native/test_lobe_atlas.cpp checks this addressing): inputs
+    LEVEL_ADDRESS_INPUTS; outputs the texel centres UV 00/10/01/11 and the fractions Fx, Fy."""
     tree = _find_group(TAPS_GROUP)
     if tree is not None:
         return tree
     tree, gin, gout = _group_with_io(
-        TAPS_GROUP,
-        [(VECTOR, "UV")] + [(FLOAT, n) for n in ("X", "Y", "W", "H", "Atlas Width", "Atlas Height", "Repeat")],
+        TAPS_GROUP, LEVEL_ADDRESS_INPUTS,
         [(VECTOR, "UV " + c) for c in TAP_CORNERS] + [(FLOAT, "Fx"), (FLOAT, "Fy")], (-1200, 900))
     sep = tree.nodes.new("ShaderNodeSeparateXYZ")
     sep.location = (-1000, 200)
     tree.links.new(gin.outputs["UV"], sep.inputs[0])
-    aw, ah = gin.outputs["Atlas Width"], gin.outputs["Atlas Height"]
-
-    def axis(value, size, y):
-        wrapped = _mix(tree, "FLOAT", gin.outputs["Repeat"], _math(tree, "MINIMUM", _math(
-            tree, "MAXIMUM", value, 0.0, location=(-850, y)), 1.0, location=(-700, y)),
-            _math(tree, "FRACT", value, location=(-700, y - 100)), location=(-550, y))
-        texel = _math(tree, "MULTIPLY_ADD", wrapped, size, -0.5, location=(-400, y))
-        first = _math(tree, "FLOOR", texel, location=(-250, y))
-        return first, _math(tree, "SUBTRACT", texel, first, location=(-100, y - 100))
-
-    x0, fx = axis(sep.outputs["X"], gin.outputs["W"], 300)
-    y0, fy = axis(sep.outputs["Y"], gin.outputs["H"], -100)
-    # Column X + 1 + x0, row (from the bottom) Atlas Height − 1 − Y − H + y0; centres at + 0.5.
-    column = _math(tree, "ADD", _math(tree, "ADD", gin.outputs["X"], 1.5, location=(-100, 400)), x0,
-                   location=(50, 400))
-    row_base = _math(tree, "SUBTRACT", _math(tree, "SUBTRACT", _math(tree, "SUBTRACT", ah, 0.5, location=(-250, -300)),
-                                                 gin.outputs["Y"], location=(-100, -300)),
-                     gin.outputs["H"], location=(50, -300))
-    row = _math(tree, "ADD", row_base, y0, location=(200, -200))
-    u0 = _math(tree, "DIVIDE", column, aw, location=(300, 400))
-    u1 = _math(tree, "DIVIDE", _math(tree, "ADD", column, 1.0, location=(200, 300)), aw, location=(350, 300))
-    v0 = _math(tree, "DIVIDE", row, ah, location=(350, -200))
-    v1 = _math(tree, "DIVIDE", _math(tree, "ADD", row, 1.0, location=(350, -300)), ah, location=(500, -300))
+    column, row = _level_origin(tree, gin)
+    centres, fractions = [], []
+    for axis, size, origin, y in (("X", "W", column, 300), ("Y", "H", row, -100)):
+        # The texel whose centre is at or left of (below) the point, and the point's fraction past it.
+        texel = _math(tree, "SUBTRACT", _level_texel(tree, gin, sep.outputs[axis], gin.outputs[size], y), 0.5,
+                      location=(-300, y))
+        first = _math(tree, "FLOOR", texel, location=(-200, y))
+        fractions.append(_math(tree, "SUBTRACT", texel, first, location=(-100, y - 100)))
+        low = _math(tree, "ADD", _math(tree, "ADD", origin, first, location=(150, y)), 0.5, location=(250, y))
+        centres.append((low, _math(tree, "ADD", low, 1.0, location=(350, y - 100))))
+    (u0, u1), (v0, v1) = centres
     for name, (u, v), y in (("UV 00", (u0, v0), 300), ("UV 10", (u1, v0), 150), ("UV 01", (u0, v1), 0),
                             ("UV 11", (u1, v1), -150)):
-        comb = tree.nodes.new("ShaderNodeCombineXYZ")
-        comb.location = (700, y)
-        tree.links.new(u, comb.inputs["X"])
-        tree.links.new(v, comb.inputs["Y"])
-        tree.links.new(comb.outputs[0], gout.inputs[name])
-    tree.links.new(fx, gout.inputs["Fx"])
-    tree.links.new(fy, gout.inputs["Fy"])
+        tree.links.new(_atlas_uv(tree, u, v, gin, (700, y)), gout.inputs[name])
+    tree.links.new(fractions[0], gout.inputs["Fx"])
+    tree.links.new(fractions[1], gout.inputs["Fy"])
+    return tree
+
+
+def atlas_point_group():
+    """The atlas UV of the point itself inside one level (inputs LEVEL_ADDRESS_INPUTS; output UV),
+    for one Linear lookup: the level's one-texel frame holds the texels its wrap mode puts beside
+    its edges, so the renderer's bilinear filtering there is the taps' (atlas_taps_group)."""
+    tree = _find_group(POINT_GROUP)
+    if tree is not None:
+        return tree
+    tree, gin, gout = _group_with_io(POINT_GROUP, LEVEL_ADDRESS_INPUTS, [(VECTOR, "UV")], (-1200, 600))
+    sep = tree.nodes.new("ShaderNodeSeparateXYZ")
+    sep.location = (-1000, 200)
+    tree.links.new(gin.outputs["UV"], sep.inputs[0])
+    column, row = _level_origin(tree, gin)
+    u = _math(tree, "ADD", column, _level_texel(tree, gin, sep.outputs["X"], gin.outputs["W"], 300),
+              location=(150, 300))
+    v = _math(tree, "ADD", row, _level_texel(tree, gin, sep.outputs["Y"], gin.outputs["H"], -100),
+              location=(150, -100))
+    tree.links.new(_atlas_uv(tree, u, v, gin, (500, 0)), gout.inputs["UV"])
     return tree
 
 
@@ -183,8 +228,9 @@ def uv_source(tree, gin, has_vector, location):
     return coordinates.outputs["UV"]
 
 
-def atlas_levels(tree, gin, atlas, repeat, uv):
-    """The two levels the footprint falls between: per level the taps node, and the blend factor."""
+def atlas_levels(tree, gin, atlas):
+    """The two levels the footprint falls between: per level (low, high) the atlas-table node
+    whose outputs X, Y, W, H frame it, and the blend factor between them."""
     lod = tree.nodes.new("ShaderNodeGroup")
     lod.node_tree = level_of_detail_group()
     lod.location = (-2000, 400)
@@ -197,24 +243,33 @@ def atlas_levels(tree, gin, atlas, repeat, uv):
                  location=(-1550, 500))
     blend = _math(tree, "SUBTRACT", level, low, location=(-1700, 300))
     table = atlas_table_group(PROVISIONAL_TABLE_NAME, atlas)  # Blender numbers it where taken
-    taps = []
+    lookups = []
     for k, index in enumerate((low, high)):
         lookup = tree.nodes.new("ShaderNodeGroup")
         lookup.name = lookup.label = ATLAS_LOOKUP % k
         lookup.node_tree = table
         lookup.location = (-1550, 300 - 250 * k)
         tree.links.new(index, lookup.inputs["Level"])
-        tap = tree.nodes.new("ShaderNodeGroup")
-        tap.node_tree = atlas_taps_group()
-        tap.location = (-1350, 300 - 250 * k)
-        tree.links.new(uv, tap.inputs["UV"])
+        lookups.append(lookup)
+    return lookups, blend
+
+
+def address_levels(tree, group_tree, lookups, atlas, repeat, uv, y):
+    """Per level (atlas_levels' lookups), a node of `group_tree` (atlas_taps_group or
+    atlas_point_group) addressing `uv` in it."""
+    nodes = []
+    for k, lookup in enumerate(lookups):
+        node = tree.nodes.new("ShaderNodeGroup")
+        node.node_tree = group_tree
+        node.location = (-1350, y - 250 * k)
+        tree.links.new(uv, node.inputs["UV"])
         for key in ("X", "Y", "W", "H"):
-            tree.links.new(lookup.outputs[key], tap.inputs[key])
-        tap.inputs["Atlas Width"].default_value = float(atlas.width)
-        tap.inputs["Atlas Height"].default_value = float(atlas.height)
-        tap.inputs["Repeat"].default_value = 1.0 if repeat else 0.0
-        taps.append(tap)
-    return taps, blend
+            tree.links.new(lookup.outputs[key], node.inputs[key])
+        node.inputs["Atlas Width"].default_value = float(atlas.width)
+        node.inputs["Atlas Height"].default_value = float(atlas.height)
+        node.inputs["Repeat"].default_value = 1.0 if repeat else 0.0
+        nodes.append(node)
+    return nodes
 
 
 def sample_atlas(tree, image, taps, blend, j, y):
@@ -239,6 +294,25 @@ def sample_atlas(tree, image, taps, blend, j, y):
         tree.links.new(tap.outputs["Fy"], bilinear.inputs["Fy"])
         colors.append(bilinear.outputs["Color"])
         alphas.append(bilinear.outputs["Alpha"])
+    return (_mix(tree, "VECTOR", blend, colors[0], colors[1], (-850, y)),
+            _mix(tree, "FLOAT", blend, alphas[0], alphas[1], (-850, y - 150)))
+
+
+def sample_atlas_linear(tree, image, points, blend, j, y):
+    """Lobe j's RGBA at the shading point from one Linear lookup in each of the two levels
+    (atlas_point_group's nodes `points`), blended: for Cycles only (see the module's docstring)."""
+    colors, alphas = [], []
+    for k, point in enumerate(points):
+        tex = tree.nodes.new("ShaderNodeTexImage")
+        tex.name = tex.label = "Lobe %d level %s" % (j, "low" if k == 0 else "high")
+        tex.image = image
+        tex.interpolation = "Linear"
+        tex.extension = "EXTEND"
+        tex.location = (-1250, y - 300 * k)
+        tex.hide = True
+        tree.links.new(point.outputs["UV"], tex.inputs["Vector"])
+        colors.append(tex.outputs["Color"])
+        alphas.append(tex.outputs["Alpha"])
     return (_mix(tree, "VECTOR", blend, colors[0], colors[1], (-850, y)),
             _mix(tree, "FLOAT", blend, alphas[0], alphas[1], (-850, y - 150)))
 

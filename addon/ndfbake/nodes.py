@@ -20,7 +20,9 @@ the material's graph is the user's) and EEVEE BSDF, which EEVEE draws through a 
 target EEVEE that the bake adds beside the user's (group_node.add_eevee_output) and Revert
 removes. Each output's lobes are narrowed toward grazing views with its engine's constant
 (GRAZING_NARROWING; lobe_nodes.grazing_roughness_group) where it has one, Cycles' unless
-cycles_lobes is WIDENED.
+cycles_lobes is WIDENED. Both outputs' lobes read the same lookups, decodes and Normal Map nodes,
+except with an atlas where EEVEE never draws BSDF: then BSDF's lobes have their own, with one
+Linear lookup a level instead of EEVEE's four Closest ones (lod_nodes).
 
 OSL: where Cycles runs OSL on the CPU, a bake may draw Cycles' lobes through one Script node
 instead (osl_group.py); `osl_status()` says where. The stock-node group works in both engines.
@@ -39,6 +41,10 @@ RETIRED_GROUPS = tuple("NDFB %s v2" % name for name in ("vMF Lobe", "Grazing Rou
 EEVEE_BSDF = "EEVEE BSDF"             # the group's second shader output (EEVEE's own lobes)
 # BakeSettings.cycles_lobes: what the group's BSDF output (Cycles' view) draws.
 WIDENED, NARROWED = "WIDENED", "NARROWED"
+# How an output's lobes read an atlas (build_material_group): lod_nodes' taps, or one Linear lookup a
+# level; the decode node of lobe j in each.
+TAPS, LINEAR = "taps", "linear"
+DECODE = {TAPS: "Decode %d", LINEAR: "Decode %d Linear"}
 # C of lobe_nodes.grazing_roughness_group, per group output (the engine that draws it); 0: the
 # lobes are drawn widened, not narrowed. Cycles' fitted offline against the normal map's own
 # response (docs/grazing-fit.md; brdf.h kGrazingNarrowing, which ndfbake.glsl uses too). EEVEE's
@@ -109,7 +115,7 @@ def held_input(socket, current, name):
 
 
 def build_material_group(name, principled, normal_map, image_texture, lobe_images, atlas=None, lod=None,
-                         current=None, cycles_lobes=NARROWED):
+                         current=None, cycles_lobes=NARROWED, cycles_only=False):
     """A group with the carried Principled inputs (+ Normal Strength, + Vector if the original
     texture's has a live (unmuted) link, + the level-of-detail constants with an atlas) and the
     BSDF and EEVEE BSDF outputs, shading through len(lobe_images) lobes: level-0 textures that
@@ -117,8 +123,10 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     of detail the scene gives (lod: a scene_lod.LodPlan, required with an atlas). Each output's
     lobes are narrowed toward grazing views with its constant (GRAZING_NARROWING) where it is not
     0, BSDF's not with cycles_lobes WIDENED; with cycles_lobes None the BSDF output is left
-    unlinked for the caller (osl_group draws Cycles' lobes itself). For a re-bake, `current` is
-    the group node of the bake it replaces, which holds the Principled's inputs (held_input)."""
+    unlinked for the caller (osl_group draws Cycles' lobes itself). cycles_only: EEVEE draws the
+    EEVEE BSDF output, never BSDF (group_node.has_eevee_output), so BSDF's lobes may read an atlas
+    with one Linear lookup a level. For a re-bake, `current` is the group node of the bake it
+    replaces, which holds the Principled's inputs (held_input)."""
     tree = _new_group(name)
     decode = lobe_nodes.lobe_group()
     carried = carried_inputs(principled, current)
@@ -152,9 +160,6 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     count = len(lobe_images)
     gout.location = (1400 + 200 * count, 0)
     names = {s.name for s in carried}
-    if atlas is not None:
-        uv = lod_nodes.uv_source(tree, gin, has_vector, (-2000, 100))
-        coordinates, blend = lod_nodes.atlas_levels(tree, gin, atlas, image_texture.extension == "REPEAT", uv)
 
     holder = principled if current is None else current
     # Specular-only lobes over one base (specular_split), or whole copies (kind None).
@@ -162,26 +167,47 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
 
     # The outputs whose lobe BSDFs the group builds: (y offset of a lobe's BSDF, y of the sum).
     layout = ({"BSDF": (0, -200)} if cycles_lobes is not None else {}) | {EEVEE_BSDF: (-450, -500)}
-    shaders, weights, moments = {output: [] for output in layout}, [], []
+    # The lookups each output reads: one set for both, or with an atlas where Cycles alone draws
+    # BSDF, one Linear lookup a level for it (lod_nodes' docstring) and the taps for EEVEE BSDF.
+    reads = {output: LINEAR if atlas is not None and cycles_only and output == "BSDF" else TAPS for output in layout}
+    if atlas is not None:
+        uv = lod_nodes.uv_source(tree, gin, has_vector, (-2000, 100))
+        levels, blend = lod_nodes.atlas_levels(tree, gin, atlas)
+        repeat = image_texture.extension == "REPEAT"
+        addressing = {TAPS: lod_nodes.address_levels(tree, lod_nodes.atlas_taps_group(), levels, atlas, repeat,
+                                                     uv, 300)}
+        if LINEAR in reads.values():
+            addressing[LINEAR] = lod_nodes.address_levels(tree, lod_nodes.atlas_point_group(), levels, atlas,
+                                                          repeat, uv, -300)
+
+    shaders = {output: [] for output in layout}
+    weights = {read: [] for read in reads.values()}
+    moments = {read: [] for read in reads.values()}
     for j, image in enumerate(lobe_images):
         y = -900 * j
-        if atlas is not None:
-            color, alpha = lod_nodes.sample_atlas(tree, image, coordinates, blend, j, y)
-        else:
-            color, alpha = lod_nodes.sample_level0(tree, gin, image, image_texture, has_vector, j, y)
+        lobes = {}  # per set of lookups: (decode node, the lobe's normal)
+        for read in dict.fromkeys(reads.values()):
+            dy = 0 if read == TAPS else -450
+            if atlas is None:
+                color, alpha = lod_nodes.sample_level0(tree, gin, image, image_texture, has_vector, j, y)
+            elif read == TAPS:
+                color, alpha = lod_nodes.sample_atlas(tree, image, addressing[read], blend, j, y)
+            else:
+                color, alpha = lod_nodes.sample_atlas_linear(tree, image, addressing[read], blend, j, y + dy)
+            dec = tree.nodes.new("ShaderNodeGroup")
+            dec.node_tree = decode
+            dec.name = dec.label = DECODE[read] % j
+            dec.location = (-800, y + dy)
+            tree.links.new(color, dec.inputs["Lobe"])
+            tree.links.new(alpha, dec.inputs["Lobe Z"])
+            if "Roughness" in names:
+                tree.links.new(gin.outputs["Roughness"], dec.inputs["Roughness"])
+            moments[read].append(dec.outputs["Moment"])
+            weights[read].append(dec.outputs["Weight"])
+            lobes[read] = dec, _normal_map(tree, gin, normal_map, dec.outputs["Normal"], (-550, y + dy - 150))
 
-        dec = tree.nodes.new("ShaderNodeGroup")
-        dec.node_tree = decode
-        dec.name = dec.label = "Decode %d" % j
-        dec.location = (-800, y)
-        tree.links.new(color, dec.inputs["Lobe"])
-        tree.links.new(alpha, dec.inputs["Lobe Z"])
-        if "Roughness" in names:
-            tree.links.new(gin.outputs["Roughness"], dec.inputs["Roughness"])
-        moments.append(dec.outputs["Moment"])
-
-        nm = _normal_map(tree, gin, normal_map, dec.outputs["Normal"], (-550, y - 150))
         for output, (dy, _) in layout.items():
+            dec, nm = lobes[reads[output]]
             roughness = dec.outputs["Roughness"]
             narrowing = grazing_narrowing(output, cycles_lobes)
             if narrowing:
@@ -189,17 +215,18 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
                                                narrowing, (-300, y + dy - 150))
             shaders[output].append(_lobe_bsdf(tree, gin, principled, carried, roughness, nm,
                                               "Lobe %d %s" % (j, output), (0, y + dy), multiscatter, kind))
-        weights.append(dec.outputs["Weight"])
 
     x_end = 1000 + 200 * count
     emission = _emission(tree, gin, (x_end, -900))
     bases = {}
     if kind in (specular_split.DIELECTRIC, specular_split.BOTH):
-        bases = _base_bsdfs(tree, gin, principled, carried, normal_map, moments, names, list(layout), (x_end, 600))
+        for k, read in enumerate(dict.fromkeys(reads.values())):
+            bases |= _base_bsdfs(tree, gin, principled, carried, normal_map, moments[read], names,
+                                 [output for output in layout if reads[output] == read], (x_end, 600 + 1400 * k))
     sums = {}
     for output, lobes in shaders.items():
         y = layout[output][1]
-        total = _weighted_sum(tree, lobes, weights, y)
+        total = _weighted_sum(tree, lobes, weights[reads[output]], y)
         if output in bases:
             total = _add_shader(tree, total, bases[output], (x_end + 200, y))
         if kind is not None:  # split lobes carry no Alpha: the group mixes the transparency in once
@@ -431,7 +458,7 @@ def remove_unused_groups(names):
     used (a material's atlas table, the shared helpers) if nothing else uses those either, and the
     specular layer's table image once no group uses it."""
     shared = [lobe_nodes.LOBE_GROUP, lobe_nodes.GRAZING_GROUP, lod_nodes.LOD_GROUP, lod_nodes.TAPS_GROUP,
-              lod_nodes.BILINEAR_GROUP, specular_split.SPLIT_GROUP, *RETIRED_GROUPS]
+              lod_nodes.POINT_GROUP, lod_nodes.BILINEAR_GROUP, specular_split.SPLIT_GROUP, *RETIRED_GROUPS]
     pending = list(dict.fromkeys(names)) + shared
     while pending:
         tree = bpy.data.node_groups.get(pending.pop(0))

@@ -9,8 +9,9 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
   the one active for rendering).
 - The "NDFB Level of Detail" node group, rendered by Cycles as an emission, equals the footprint
   formula evaluated per pixel from the camera's intrinsics (independent of scene_lod's numpy).
-- The atlas path (table, taps, four Closest lookups, bilinear in nodes) renders exactly what Cycles'
-  own bilinear (Linear) lookup of the level's file renders, with repeat across tile borders.
+- Both atlas paths (table, taps, four Closest lookups, bilinear in nodes; table, point, one Linear
+  lookup in the level's frame) render exactly what Cycles' own bilinear (Linear) lookup of the
+  level's file renders, with repeat across tile borders.
 - A bake with a camera writes only the levels the camera reaches, and one atlas per lobe; the
   group's pixel angle follows the lens and the resolution through drivers; revert removes them.
 - A material name near Blender's 63-byte limit: revert removes its atlas table, and re-bakes give
@@ -194,26 +195,22 @@ def test_atlas_lookups_equal_bilinear_filtering_of_the_level_files():
         camera = _camera(location=(0.0, 0.0, 5.0), kind="ORTHO")
         camera.data.ortho_scale = 2.0
         bpy.context.scene.world = None
-        worst = 0.0
+        worst = {}
         for level in (0, 1, 3):
-            material, tree, emission = _emission_material("Atlas %d" % level)
-            plane.data.materials.clear()
-            plane.data.materials.append(material)
-            uv = tree.nodes.new("ShaderNodeTexCoord").outputs["UV"]
-            table = tree.nodes.new("ShaderNodeGroup")
-            table.node_tree = lod_nodes.atlas_table_group("table %d" % level, atlas)
-            table.inputs["Level"].default_value = float(level)
-            taps = tree.nodes.new("ShaderNodeGroup")
-            taps.node_tree = lod_nodes.atlas_taps_group()
-            tree.links.new(uv, taps.inputs["UV"])
-            for key in ("X", "Y", "W", "H"):
-                tree.links.new(table.outputs[key], taps.inputs[key])
-            taps.inputs["Atlas Width"].default_value = float(atlas.width)
-            taps.inputs["Atlas Height"].default_value = float(atlas.height)
-            taps.inputs["Repeat"].default_value = 1.0
-            color, _alpha = lod_nodes.sample_atlas(tree, atlas_image, [taps, taps], 0.0, 0, 0)
-            tree.links.new(color, emission.inputs["Color"])
-            ours = _render_cycles(os.path.join(directory, "atlas%d.exr" % level), 64, 64)[..., :3]
+            ours = {}
+            for group, sample in ((lod_nodes.atlas_taps_group(), lod_nodes.sample_atlas),
+                                  (lod_nodes.atlas_point_group(), lod_nodes.sample_atlas_linear)):
+                material, tree, emission = _emission_material("Atlas %d %s" % (level, group.name))
+                plane.data.materials.clear()
+                plane.data.materials.append(material)
+                uv = tree.nodes.new("ShaderNodeTexCoord").outputs["UV"]
+                table = tree.nodes.new("ShaderNodeGroup")
+                table.node_tree = lod_nodes.atlas_table_group("table %d" % level, atlas)
+                table.inputs["Level"].default_value = float(level)
+                address = lod_nodes.address_levels(tree, group, [table], atlas, True, uv, 0)
+                color, _alpha = sample(tree, atlas_image, address * 2, 0.0, 0, 0)
+                tree.links.new(color, emission.inputs["Color"])
+                ours[group.name] = _render_cycles(os.path.join(directory, "atlas%d.exr" % level), 64, 64)[..., :3]
 
             plain, tree, emission = _emission_material("Level %d" % level)
             plane.data.materials.clear()
@@ -225,12 +222,15 @@ def test_atlas_lookups_equal_bilinear_filtering_of_the_level_files():
             tex.extension = "REPEAT"
             tree.links.new(tex.outputs["Color"], emission.inputs["Color"])
             theirs = _render_cycles(os.path.join(directory, "level%d.exr" % level), 64, 64)[..., :3]
-            difference = float(np.abs(ours - theirs).max())
-            worst = max(worst, difference)
-            print("  level %d: largest difference %.2e (values up to %.3f)" % (
-                level, difference, float(np.abs(theirs).max())))
             h.expect(float(np.abs(theirs).max()) > 0.05, "level %d renders black" % level)
-        h.expect(worst < 2e-3, "the atlas lookups differ from bilinear filtering by %.4f" % worst)
+            for name, image in ours.items():
+                difference = float(np.abs(image - theirs).max())
+                worst[name] = max(worst.get(name, 0.0), difference)
+                print("  level %d, %s: largest difference %.2e (values up to %.3f)" % (
+                    level, name, difference, float(np.abs(theirs).max())))
+        for name, difference in worst.items():
+            h.expect(difference < 2e-3, "the atlas lookups of %s differ from bilinear filtering by %.4f" % (
+                name, difference))
 
 
 def test_a_bake_with_a_camera_writes_only_the_levels_it_reaches():
@@ -282,6 +282,79 @@ def test_a_bake_with_a_camera_writes_only_the_levels_it_reaches():
         leftovers = [g.name for g in bpy.data.node_groups]
         h.expect(not leftovers, "revert left node groups: %s" % leftovers)
         h.expect(material.node_tree.animation_data is None, "revert left the drivers' animation data")
+
+
+def _lookups(tree, socket):
+    """The interpolations of the image lookups that group `tree`'s output `socket` reads."""
+    found, stack, seen = set(), [socket.node.inputs[socket.name]], set()
+    while stack:
+        for link in stack.pop().links:
+            node = link.from_node
+            if node.name not in seen:
+                seen.add(node.name)
+                if node.bl_idname == "ShaderNodeTexImage":
+                    found.add(node.interpolation)
+                stack.extend(node.inputs)
+    return found
+
+
+def test_cycles_alone_reads_each_level_with_one_linear_lookup():
+    """Where the bake gives EEVEE an output of its own, the group's BSDF output (drawn by Cycles
+    alone) reads each atlas level with one Linear lookup, EEVEE BSDF with four Closest ones; and
+    Cycles renders the same through either. Where EEVEE draws the BSDF output too (the Principled
+    feeds the user's Mix Shader; a re-bake after the user deleted the EEVEE output), it reads the
+    Closest lookups only: EEVEE would MIP-map a Linear one and break at the atlas's tile seams."""
+    from ndfbake import bake, group_node, node_builders, nodes
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory, pattern="fbm", size=128, metallic=0.0)
+        _resolution(48, 48)
+        _camera(location=(0.0, 2.0, 2.0), rotation=(math.radians(45.0), 0.0, math.radians(180.0)))
+        h.uniform_world(bpy.context.scene, "Grey", (0.2, 0.2, 0.2))
+        bpy.ops.object.light_add(type="SUN", rotation=(math.radians(-40.0), 0.0, 0.0))
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        tree = material.node_tree
+        group = tree.nodes["ndfbake"].node_tree
+        gout = next(n for n in group.nodes if n.bl_idname == "NodeGroupOutput")
+        cycles, eevee = (_lookups(group, gout.inputs[name]) for name in ("BSDF", nodes.EEVEE_BSDF))
+        print("  with an EEVEE output: BSDF reads %s, EEVEE BSDF %s" % (sorted(cycles), sorted(eevee)))
+        h.expect(group_node.EEVEE_OUTPUT in tree.nodes, "the bake added no EEVEE output")
+        h.expect(cycles == {"Linear"} and eevee == {"Closest"}, "lookups: BSDF %s, EEVEE BSDF %s" % (cycles, eevee))
+
+        linear = _render_cycles(os.path.join(directory, "linear.exr"), 48, 48)[..., :3]
+        for j in range(nodes.lobe_count(group)):  # Cycles' lobes (and base) through EEVEE's lookups
+            decode, taps = (group.nodes[nodes.DECODE[read] % j] for read in (nodes.LINEAR, nodes.TAPS))
+            for output in decode.outputs:
+                for link in list(output.links):
+                    group.links.new(taps.outputs[output.name], link.to_socket)
+        h.expect(_lookups(group, gout.inputs["BSDF"]) == {"Closest"}, "relinking left Linear lookups")
+        closest = _render_cycles(os.path.join(directory, "closest.exr"), 48, 48)[..., :3]
+        difference = float(np.abs(linear - closest).mean())
+        print("  Cycles, one Linear against four Closest lookups a level: mean %.2e, largest %.2e (mean value %.3f)"
+              % (difference, float(np.abs(linear - closest).max()), float(closest.mean())))
+        h.expect(closest.mean() > 0.02 and difference < 1e-3 * closest.mean(),
+                 "the Linear lookups render %.2e apart from the Closest ones" % difference)
+
+        tree.nodes.remove(tree.nodes[group_node.EEVEE_OUTPUT])  # EEVEE now draws the group's BSDF
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        group = tree.nodes["ndfbake"].node_tree
+        gout = next(n for n in group.nodes if n.bl_idname == "NodeGroupOutput")
+        shared = _lookups(group, gout.inputs["BSDF"])
+        print("  re-baked without the EEVEE output: BSDF reads %s" % sorted(shared))
+        h.expect(shared == {"Closest"}, "re-baked without the EEVEE output, BSDF reads %s" % shared)
+
+        bake.revert(material)
+        mix = tree.nodes.new("ShaderNodeMixShader")
+        tree.links.new(tree.nodes["Principled BSDF"].outputs["BSDF"], mix.inputs[1])
+        tree.links.new(mix.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        group = tree.nodes["ndfbake"].node_tree
+        gout = next(n for n in group.nodes if n.bl_idname == "NodeGroupOutput")
+        shared = _lookups(group, gout.inputs["BSDF"])
+        h.expect(group_node.EEVEE_OUTPUT not in tree.nodes and shared == {"Closest"},
+                 "behind the user's mix, BSDF reads %s" % shared)
+        bake.revert(material)  # the shared groups go with the last bake using them, the Linear path's too
+        left = [g.name for g in bpy.data.node_groups if g.get(node_builders.TAG)]
+        h.expect(not left, "node groups left after Revert: %s" % left)
 
 
 def test_revert_removes_the_atlas_table_of_a_long_material_name():
@@ -480,6 +553,7 @@ if __name__ == "__main__":
            test_the_level_of_detail_group_renders_the_footprint_formula,
            test_atlas_lookups_equal_bilinear_filtering_of_the_level_files,
            test_a_bake_with_a_camera_writes_only_the_levels_it_reaches,
+           test_cycles_alone_reads_each_level_with_one_linear_lookup,
            test_revert_removes_the_atlas_table_of_a_long_material_name,
            test_a_rebake_of_a_long_material_name_names_its_atlas_table,
            test_long_names_that_blender_cuts_alike_keep_what_each_id_is,
