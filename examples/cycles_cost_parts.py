@@ -10,13 +10,15 @@ A diagnostic: only the times mean something. Variants (every material's group, s
 - made constant, so that Cycles folds the part away (each of these also changes the image, and
   with it the light paths, so its saving is not the part's cost alone):
   constant table (each atlas table's outputs, a level's frame in the atlas), constant level (the
-  level of detail: 2; the tables and the blend of two levels fold away with it), one tap a level
-  (the bilinear weights 0: one lookup a level instead of four), no atlas sampling (the lobes'
-  texels a smooth function of the UV: what is left is the decode, the Normal Map nodes and the
-  closures);
+  level of detail: 2; the tables and the blend of two levels fold away with it), no atlas
+  sampling (the lobes' texels a smooth function of the UV: what is left is the decode, the Normal
+  Map nodes and the closures);
+- four taps a level: Cycles' lobes read EEVEE's four Closest lookups a level, bilinear in nodes,
+  instead of their one Linear lookup (what a group draws where EEVEE shares its BSDF output;
+  addon/ndfbake/lod_nodes.py): the same image;
 - done twice, the second result mixed in with weight 1e-6 and its inputs nudged by a relative
   1e-6 (Cycles merges nodes of equal inputs): the same image and light paths, so the added time
-  is the part's cost. lookups twice (tap addresses, lookups and bilinear weights of every lobe),
+  is the part's cost. lookups twice (lookup addresses, lookups and blends of every lobe),
   all sampling twice (the level of detail and the atlas tables too).
 Each variant is rendered once to warm up and once timed per round, the rounds interleaved; the
 fastest round counts. Prints seconds and the ratio to plain.
@@ -76,13 +78,17 @@ def constant_level():
                 _unlink_to_constant(tree, node.outputs["Level"], CONSTANT_LEVEL)
 
 
-def one_tap_a_level():
-    from ndfbake import lod_nodes
+def four_taps_a_level():
+    """Cycles' lobes read the four Closest lookups a level that EEVEE's read (what a group draws
+    where EEVEE draws its BSDF output too) instead of one Linear lookup: the same texels (the
+    diffuse base's mean normal follows, through the decodes' moments)."""
+    from ndfbake import nodes
     for tree in _groups():
-        for node in tree.nodes:
-            if node.bl_idname == "ShaderNodeGroup" and node.node_tree.name == lod_nodes.BILINEAR_GROUP:
-                for key in ("Fx", "Fy"):
-                    _set_input(tree, node.inputs[key], 0.0)
+        for j in range(nodes.lobe_count(tree)):
+            node, taps = (tree.nodes[nodes.DECODE[read] % j] for read in (nodes.LINEAR, nodes.TAPS))
+            for output in node.outputs:
+                for link in list(output.links):
+                    tree.links.new(taps.outputs[output.name], link.to_socket)
 
 
 def no_atlas_sampling():
@@ -160,9 +166,10 @@ def _sampling_twice(lookups_only):
     from ndfbake.group_node import _socket_by_identifier
     from ndfbake.node_builders import _mix
     for tree in _groups():
-        taps = [n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup" and n.node_tree.name == lod_nodes.TAPS_GROUP]
+        addressing = [n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup"
+                      and n.node_tree.name in (lod_nodes.TAPS_GROUP, lod_nodes.POINT_GROUP)]
         if lookups_only:
-            shared = set(tree.nodes) - _downstream(taps)
+            shared = set(tree.nodes) - _downstream(addressing)
         else:
             shared = {n for n in tree.nodes if n.bl_idname in ("NodeGroupInput", "ShaderNodeTexCoord")}
         copies, nudges = {}, {}
@@ -183,7 +190,7 @@ def all_sampling_twice():
 
 
 VARIANTS = (("plain", None), ("baked", None), ("constant table", constant_table),
-            ("constant level", constant_level), ("one tap a level", one_tap_a_level),
+            ("constant level", constant_level), ("four taps a level", four_taps_a_level),
             ("no atlas sampling", no_atlas_sampling), ("lookups twice", lookups_twice),
             ("all sampling twice", all_sampling_twice))
 
