@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Installs what ndfbake needs on Debian 12: Debian's own packages, then Blender 4.2, 4.5 and 5.0 as
 # the bpy module from PyPI (scripts/install-bpy.sh; NDFBAKE_BPY_SERIES="4.5" installs fewer, "" none),
-# Debian 13's Blender 4.3 in a chroot (scripts/install-debian13-blender.sh), and the add-on library's
-# toolchain (scripts/install-addon-toolchain.sh). Run as root.
+# Debian 13's Blender 4.3 in a chroot (scripts/install-debian13-blender.sh), Debian 11 with Python in
+# another (scripts/install-debian11-runtime.sh), and the add-on library's toolchain
+# (scripts/install-addon-toolchain.sh). Run as root.
 set -euo pipefail
 packages=(build-essential cmake pkg-config libopenimageio-dev libopenexr-dev openimageio-tools
           libgtest-dev python3 python3-venv blender assimp-testmodels
@@ -15,7 +16,7 @@ packages=(build-essential cmake pkg-config libopenimageio-dev libopenexr-dev ope
           libegl1 libegl-mesa0   # EEVEE in `blender -b` renders through surfaceless EGL (Mesa)
           libxrender1 libxi6 libxfixes3 libxkbcommon0 libsm6 libgl1  # what the bpy wheels link
           clang libclang-rt-14-dev   # clang + libFuzzer: the fuzz targets (scripts/fuzz.sh)
-          debootstrap)           # the Debian 13 chroot with its Blender 4.3 (install-debian13-blender.sh)
+          debootstrap)           # the Debian 13 and 11 chroots (install-debian13-blender.sh, install-debian11-runtime.sh)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -33,6 +34,8 @@ bash "$(dirname "$0")/install-bpy.sh" ${NDFBAKE_BPY_SERIES-4.2 4.5 5.0} ||
   echo "WARNING: install-bpy.sh failed: the Blender tests of the bpy series it missed are skipped" >&2
 bash "$(dirname "$0")/install-debian13-blender.sh" ||
   echo "WARNING: install-debian13-blender.sh failed: the Debian 13 Blender tests are skipped" >&2
+bash "$(dirname "$0")/install-debian11-runtime.sh" ||
+  echo "WARNING: install-debian11-runtime.sh failed: the add-on library's Debian 11 test is disabled" >&2
 # zig and the Debian sources that build the add-on's library for glibc 2.28. Without them the build
 # still succeeds, with a gcc-built add-on library that needs glibc 2.36 (CMake warns), so a
 # failure here (PyPI or the archive out of reach) is a warning, not the end of the install.
