@@ -276,7 +276,8 @@ def test_save_reopen_then_revert():
         h.expect(len(tables) == (1 if split else 0) and all(i.packed_file and tuple(i.size) == size for i in tables),
                  "the specular layer's table after reopening: %s" % [(i.name, tuple(i.size)) for i in tables])
         bake.revert(material)
-        h.expect(h.dump_material(material) == before, "material differs after revert in the reopened file")
+        h.expect(h.dump_material(material) == before, "material differs after revert in the reopened file: %s"
+                 % h.differences(before, h.dump_material(material)))
         left = [i.name for i in bpy.data.images if i.name.startswith("Bumpy lobe") or i.get(specular_split.TABLE_KEY)]
         h.expect(not left, "images left after Revert: %s" % left)
         h.expect(not any(g.get("ndfbake") for g in bpy.data.node_groups), "node groups left after Revert: %s"

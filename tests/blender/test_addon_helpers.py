@@ -191,12 +191,17 @@ def baked_scene(directory, pattern="bumps", size=64, material_name="Bumpy", **ma
 
 
 def _value(value):
+    """A property's value as plain data that outlives the file (no Blender struct kept: one read
+    after the file it came from is closed crashes)."""
     if hasattr(value, "__len__") and not isinstance(value, str):
-        return tuple(round(float(v), 6) if isinstance(v, float) else v for v in value)
+        return tuple(_value(v) for v in value)
     if isinstance(value, float):
         return round(value, 6)
     if hasattr(value, "name"):
         return ("ID", value.name)
+    if isinstance(value, bpy.types.bpy_struct):  # a struct without a name (5.3's node panel states)
+        return tuple((p.identifier, _value(getattr(value, p.identifier))) for p in value.bl_rna.properties
+                     if p.identifier != "rna_type" and p.type not in {"POINTER", "COLLECTION"})
     return value
 
 
