@@ -37,7 +37,7 @@ from .node_builders import TAG, _add_socket, _new_group, _vmath, socket_value
 # estimate for both engines (until 2026-11-28).
 RETIRED_GROUPS = tuple("NDFB %s v2" % name for name in ("vMF Lobe", "Grazing Roughness", "Level of Detail",
                                                          "Atlas Taps", "Bilinear")) \
-    + ("NDFB Specular Split v3", "NDFB Specular Layer v3")
+    + ("NDFB Specular Split v3", "NDFB Specular Layer v3", "NDFB Specular Layers v3")
 EEVEE_BSDF = "EEVEE BSDF"             # the group's second shader output (EEVEE's own lobes)
 # BakeSettings.cycles_lobes: what the group's BSDF output (Cycles' view) draws.
 WIDENED, NARROWED = "WIDENED", "NARROWED"

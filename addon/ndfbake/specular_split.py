@@ -32,11 +32,11 @@ dielectric).
 """
 import bpy
 
-from . import material_scan, node_animation
+from . import lod_nodes, material_scan, node_animation
 from . import specular_albedo_table as table
 from .node_builders import COLOR, FLOAT, GROUP_VERSION, VECTOR, _find_group, _group_with_io, _link, _math, _vmath
 
-SPLIT_GROUP = "NDFB Specular Layers v%d" % GROUP_VERSION
+SPLIT_GROUP = "NDFB Specular Albedo v%d" % GROUP_VERSION
 SPLIT_INPUTS = ("Base Color", "Metallic", "IOR", "Specular IOR Level", "Specular Tint", "Roughness")
 # Layers that keep a lobe a whole Principled BSDF (Principled v2 names).
 LAYERED_INPUTS = ("Coat Weight", "Sheen Weight", "Transmission Weight")
@@ -147,6 +147,49 @@ def _table_lookup(tree, image, column, v, slice_index, location):
     return rgb.outputs
 
 
+def _table_lookup_taps(tree, image, column, v, slice_index, location):
+    """_table_lookup from four Closest lookups weighted in nodes, for what EEVEE alone draws (its
+    split-sum slice): EEVEE 5.3 reads 0 from a Linear lookup whose coordinates have no screen
+    derivatives (a flat surface under an orthographic camera: the furnace drew the diffuse base
+    black), where Closest lookups are read as they are. Cycles keeps the one Linear lookup."""
+    x, y = location
+    width, height = float(SLICE_WIDTH * SLICES), float(table.ROUGHNESS_SIZE)
+    # Texel positions measured from texel centres: the lower tap and the fraction past it, per axis.
+    across = _math(tree, "SUBTRACT", _math(tree, "MULTIPLY_ADD", slice_index, float(SLICE_WIDTH), column,
+                                           location=(x, y)), 0.5, location=(x + 100, y))
+    down = _math(tree, "MULTIPLY_ADD", v, height, -0.5, location=(x, y - 100))
+    taps = []
+    for position, size, yy in ((across, width, y), (down, height, y - 100)):
+        first = _math(tree, "FLOOR", position, location=(x + 200, yy))
+        low = _math(tree, "DIVIDE", _math(tree, "ADD", first, 0.5, location=(x + 300, yy)), size,
+                    location=(x + 400, yy))
+        high = _math(tree, "ADD", low, 1.0 / size, location=(x + 500, yy))
+        taps.append((low, high, _math(tree, "SUBTRACT", position, first, location=(x + 300, yy - 50))))
+    (u0, u1, fx), (v0, v1, fy) = taps
+    bilinear = tree.nodes.new("ShaderNodeGroup")
+    bilinear.node_tree = lod_nodes.bilinear_group()
+    bilinear.location = (x + 900, y)
+    for corner, (u, row) in zip(lod_nodes.TAP_CORNERS, ((u0, v0), (u1, v0), (u0, v1), (u1, v1))):
+        uv = tree.nodes.new("ShaderNodeCombineXYZ")
+        uv.location = (x + 600, y)
+        tree.links.new(u, uv.inputs["X"])
+        tree.links.new(row, uv.inputs["Y"])
+        tex = tree.nodes.new("ShaderNodeTexImage")
+        tex.image = image
+        tex.interpolation = "Closest"
+        tex.extension = "EXTEND"
+        tex.location = (x + 750, y)
+        tex.hide = True
+        tree.links.new(uv.outputs["Vector"], tex.inputs["Vector"])
+        tree.links.new(tex.outputs["Color"], bilinear.inputs["Color " + corner])
+    tree.links.new(fx, bilinear.inputs["Fx"])
+    tree.links.new(fy, bilinear.inputs["Fy"])
+    rgb = tree.nodes.new("ShaderNodeSeparateXYZ")
+    rgb.location = (x + 1050, y)
+    tree.links.new(bilinear.outputs["Color"], rgb.inputs["Vector"])
+    return rgb.outputs
+
+
 def specular_split_group():
     """Inputs SPLIT_INPUTS, Multiscatter (1 where the Principled draws Multiscatter GGX, else 0) and
     Normal (the base's, world space); outputs CYCLES_DIFFUSE and EEVEE_DIFFUSE."""
@@ -211,7 +254,7 @@ def specular_split_group():
                    location=(1350, -700))
     _diffuse_under(tree, gin, _largest_channel(tree, layer, (1500, -700)), dielectric, gout.inputs[CYCLES_DIFFUSE],
                    (1950, -700))
-    split_sum = _table_lookup(tree, image, column, v, float(EEVEE_SLICE), (-450, -1600))
+    split_sum = _table_lookup_taps(tree, image, column, v, float(EEVEE_SLICE), (-450, -1600))
     eevee = _eevee_layer_albedo(tree, gin, f0, split_sum["X"], split_sum["Y"], (600, -1600))
     _diffuse_under(tree, gin, eevee, dielectric, gout.inputs[EEVEE_DIFFUSE], (1950, -1600))
     return tree
