@@ -17,7 +17,8 @@ accuracy a Lambertian term has (it is smooth in the normal). So where it may, a 
   read from one table image (tools/specular_albedo.py computes them; specular_albedo_table.py
   holds them), two lookups per material. That is Cycles' base; EEVEE Next's (the group's EEVEE
   output) is darkened by EEVEE's own estimate, its split sum F0·t·A + F90·B, read from the same
-  image by a third lookup that only EEVEE's output draws. No base at all where Metallic is a
+  image by a lookup that only EEVEE's output draws (four Closest texels weighted in nodes:
+  _table_lookup_taps). No base at all where Metallic is a
   constant 1: it would draw nothing.
 - per lobe, the Principled BSDF's specular only: where Metallic is a constant 1 a conductor
   (Metallic 1: the original's metal lobe), where it is a constant 0 the dielectric layer over a
