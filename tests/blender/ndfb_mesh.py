@@ -27,7 +27,13 @@ class MeshReport(ctypes.Structure):
 
 
 class SpaceOptions(ctypes.Structure):
-    _fields_ = [("struct_size", ctypes.c_uint32), ("padding", ctypes.c_uint32), ("threads", ctypes.c_uint32)]
+    _fields_ = [("struct_size", ctypes.c_uint32), ("padding", ctypes.c_uint32), ("threads", ctypes.c_uint32),
+                ("frame_normal", ctypes.c_uint32)]
+
+
+# ndfb_frame_normal
+FRAME_NORMAL_INTERPOLATED = 0
+FRAME_NORMAL_UNIT = 1
 
 
 def _ptr(array, ctype):
@@ -98,11 +104,13 @@ class Library:
                     "ndfb_mesh_diagnose")
         return report, text.value.decode()
 
-    def convert(self, arrays, image, width, height, to_tangent, padding=16, tangents=None):
+    def convert(self, arrays, image, width, height, to_tangent, padding=16, tangents=None,
+                frame_normal=FRAME_NORMAL_INTERPOLATED):
         m = arrays.struct(self)
         opts = SpaceOptions()
         self.lib.ndfb_space_options_init(ctypes.byref(opts))
         opts.padding = padding
+        opts.frame_normal = frame_normal
         src = np.ascontiguousarray(image, dtype=np.float32).reshape(-1)
         out = np.zeros(width * height * 3, dtype=np.float32)
         coverage = np.zeros(width * height, dtype=np.uint8)

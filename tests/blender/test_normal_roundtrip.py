@@ -5,12 +5,14 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 
 1. A mirrored Suzanne (triangulated, copy's UVs mirrored beside the original's) gets a bumpy
    material; Cycles bakes its shading normals in OBJECT space: the object-space map O.
-2. ndfb_object_to_tangent converts O to a tangent-space map T (frames computed by ndfbake).
+2. ndfb_object_to_tangent converts O to a tangent-space map T (frames computed by ndfbake, with
+   the frame normal this Blender's Cycles uses: as interpolated up to 5.2, normalized from 5.3).
 3. A second material renders T through an Image Texture and the Normal Map node (tangent space,
    Cycles computing its own MikkTSpace tangents); Cycles bakes its shading normals in OBJECT
    space again: O'.
 4. O' must reproduce O: per texel angle, away from island borders (where a texel centre can fall
-   outside every triangle) under 1 degree. Also checks that ndfb_tangent_to_object(T) == O.
+   outside every triangle) under 1 degree. Also checks that ndfb_tangent_to_object(T) == O, and
+   that T made with the other frame normal misses by at least 3 degrees (the negative control).
 """
 import os
 import sys
@@ -19,13 +21,16 @@ import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ndfb_mesh import library_from_argv, MeshArrays  # noqa: E402
+from ndfb_mesh import library_from_argv, MeshArrays, FRAME_NORMAL_INTERPOLATED, FRAME_NORMAL_UNIT  # noqa: E402
 from test_addon_helpers import exit_now  # noqa: E402
 from test_tangents import mirrored_suzanne  # noqa: E402
 from ndfbake import blender_compat  # noqa: E402  (ndfb_mesh put addon/ on the path)
 
 SIZE = 128
 LIMIT_DEGREES = 1.0
+# The other frame normal must miss by at least this much, or the test could not tell them apart.
+CONTROL_DEGREES = 3.0
+RULE_NAMES = {FRAME_NORMAL_INTERPOLATED: "as interpolated", FRAME_NORMAL_UNIT: "normalized"}
 BUMP_FREQUENCY = 12.0  # radians per object unit: a few bumps across Suzanne's features
 BUMP_DISTANCE = 0.05   # height scale: normals bent by tens of degrees
 # A bumped normal this far from the unmapped one is at the horizon or past it: 3.4's Bump node
@@ -124,6 +129,27 @@ def normal_map_material(image, uv_name):
     return m
 
 
+def cycles_frame_normal():
+    """The frame normal of Cycles' Normal Map node (tangent space) in this Blender: the barycentric
+    interpolation of the corner normals, as is, up to 5.2 (5.0, 5.1.0 and 5.2.3 checked); normalized
+    first from 5.3 on (5.3.0: up to 14.5 degrees apart on Suzanne's curved low-poly ears)."""
+    return FRAME_NORMAL_UNIT if bpy.app.version >= (5, 3, 0) else FRAME_NORMAL_INTERPOLATED
+
+
+def round_trip(lib, obj, arrays, original, rule):
+    """O -> T by ndfbake (frame normal `rule`), T rendered through the Normal Map node and baked back
+    to object space: (rendered, its bake mask, ndfbake's coverage, ndfb_tangent_to_object(T))."""
+    tangent_map, coverage = lib.convert(arrays, original, SIZE, SIZE, to_tangent=True, padding=4, frame_normal=rule)
+    back, _ = lib.convert(arrays, tangent_map, SIZE, SIZE, to_tangent=False, padding=0, frame_normal=rule)
+    tangent_image = float_image("tangent_space")
+    rgba = np.ones((SIZE, SIZE, 4), dtype=np.float32)
+    rgba[..., :3] = tangent_map * 0.5 + 0.5
+    tangent_image.pixels.foreach_set(rgba[::-1].reshape(-1))
+    rendered, baked_again = bake_object_normals(obj, normal_map_material(tangent_image, obj.data.uv_layers.active.name),
+                                                float_image("object_space_again"))
+    return rendered, baked_again, coverage, back
+
+
 def interior(mask, radius):
     """Texels whose (2 radius + 1)^2 neighbourhood is entirely inside `mask`."""
     out = mask.copy()
@@ -162,15 +188,10 @@ def main():
 
     blender_compat.ensure_loop_normals(me)
     arrays = MeshArrays.from_blender(me)
-    tangent_map, coverage = lib.convert(arrays, original, SIZE, SIZE, to_tangent=True, padding=4)
-    back, _ = lib.convert(arrays, tangent_map, SIZE, SIZE, to_tangent=False, padding=0)
-
-    tangent_image = float_image("tangent_space")
-    rgba = np.ones((SIZE, SIZE, 4), dtype=np.float32)
-    rgba[..., :3] = tangent_map * 0.5 + 0.5
-    tangent_image.pixels.foreach_set(rgba[::-1].reshape(-1))
-    rendered, baked_again = bake_object_normals(obj, normal_map_material(tangent_image, me.uv_layers.active.name),
-                                                float_image("object_space_again"))
+    rule = cycles_frame_normal()
+    other_rule = FRAME_NORMAL_INTERPOLATED if rule == FRAME_NORMAL_UNIT else FRAME_NORMAL_UNIT
+    rendered, baked_again, coverage, back = round_trip(lib, obj, arrays, original, rule)
+    rendered_other, _, _, _ = round_trip(lib, obj, arrays, original, other_rule)
 
     # How much the map itself bends the normals: the round trip must do much better than that.
     plain = bpy.data.materials.new("plain")
@@ -182,6 +203,7 @@ def main():
     inner = interior(inside, 1)
     away = inner & ~below_horizon
     error = angles_degrees(original, rendered)
+    error_other = angles_degrees(original, rendered_other)
     inverse = angles_degrees(original, back / np.maximum(np.linalg.norm(back, axis=-1, keepdims=True), 1e-12))
     print("texels: %d baked, %d rasterized by ndfbake, %d away from island borders" % (
         int(baked.sum()), int((coverage == 1).sum()), int(away.sum())))
@@ -190,11 +212,13 @@ def main():
                                                  int((inner & below_horizon).sum()), HORIZON_DEGREES))
     print("ndfb_tangent_to_object(ndfb_object_to_tangent(O)) vs O: max %.2e deg" % float(inverse[coverage == 1].max()))
     border = inside & ~inner & ~below_horizon
-    print("round trip through Blender's Normal Map node (Cycles): %d texels away from island borders: max %.3f deg, "
-          "mean %.4f deg; %d border texels: median %.3f deg, %d over 1 deg (texel centres near an edge that the two "
-          "rasterizers give to different triangles, or UVs that overlap)" % (
-              int(away.sum()), float(error[away].max()), float(error[away].mean()), int(border.sum()),
-              float(np.median(error[border])), int((error[border] > 1.0).sum())))
+    print("round trip through Blender's Normal Map node (Cycles), frame normal %s: %d texels away from island "
+          "borders: max %.3f deg, mean %.4f deg; %d border texels: median %.3f deg, %d over 1 deg (texel centres near "
+          "an edge that the two rasterizers give to different triangles, or UVs that overlap)" % (
+              RULE_NAMES[rule], int(away.sum()), float(error[away].max()), float(error[away].mean()),
+              int(border.sum()), float(np.median(error[border])), int((error[border] > 1.0).sum())))
+    print("the other frame normal (%s), the negative control: max %.3f deg, mean %.4f deg" % (
+        RULE_NAMES[other_rule], float(error_other[away].max()), float(error_other[away].mean())))
     failures = []
     if away.sum() < 0.3 * (coverage == 1).sum():
         failures.append("too few texels compared")
@@ -204,6 +228,9 @@ def main():
         failures.append("ndfb_tangent_to_object is not the inverse of ndfb_object_to_tangent")
     if float(error[away].max()) >= LIMIT_DEGREES:
         failures.append("round trip error %.3f deg >= %.1f deg" % (float(error[away].max()), LIMIT_DEGREES))
+    if float(error_other[away].max()) < CONTROL_DEGREES:
+        failures.append("the other frame normal renders within %.1f deg too (max %.3f): the mesh no longer tells the "
+                        "two rules apart" % (CONTROL_DEGREES, float(error_other[away].max())))
     if failures:
         print("FAILURES:\n  " + "\n  ".join(failures))
         exit_now(1)

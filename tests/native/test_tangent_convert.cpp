@@ -5,8 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cstddef>
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "ndfbake.h"
@@ -24,12 +26,14 @@ protected:
     // Converts `in` (w*h*3) with the given tangents (empty: computed) and padding.
     std::vector<float> convert(const TestMesh& m, const std::vector<float>& in, int w, int h, bool to_tangent,
                                uint32_t padding, std::vector<uint8_t>* coverage = nullptr,
-                               const std::vector<float>& tangents = {})
+                               const std::vector<float>& tangents = {},
+                               ndfb_frame_normal frame_normal = NDFB_FRAME_NORMAL_INTERPOLATED)
     {
         const ndfb_mesh v = mesh_view(m);
         ndfb_space_options o;
         ndfb_space_options_init(&o);
         o.padding = padding;
+        o.frame_normal = frame_normal;
         std::vector<float> out(in.size());
         std::vector<uint8_t> cov(size_t(w) * h);
         auto fn = to_tangent ? ndfb_object_to_tangent : ndfb_tangent_to_object;
@@ -75,42 +79,100 @@ TEST_F(TangentConvert, OnAFlatPlaneTheFrameIsTheUVAxesAndTheNormal)
         }
 }
 
+// One triangle with deliberately uneven corner frames, so that normalizing T or N per pixel gives
+// another answer; texel (2, 5) of an 8x8 image lies inside it.
+struct UnevenTriangle {
+    TestMesh mesh;
+    Vec3 n0, n1, n2;
+    std::vector<float> tangents{0.9f, 0.3f, -0.3f, 1.0f, 0.6f, -0.7f, 0.4f, 1.0f, 1.0f, 0.1f, 0.0f, -1.0f};
+    UnevenTriangle()
+        : n0(normalize_or(Vec3{0.4f, 0, 1}, kUp)), n1(normalize_or(Vec3{-0.3f, 0.5f, 1}, kUp)),
+          n2(normalize_or(Vec3{0, -0.6f, 1}, kUp))
+    {
+        const uint32_t a = mesh.vertex({0, 0, 0}), b = mesh.vertex({1, 0, 0.3f}), c = mesh.vertex({0, 1, -0.2f});
+        mesh.face({a, b, c}, {{{0.05f, 0.05f}}, {{0.95f, 0.1f}}, {{0.1f, 0.95f}}}, {n0, n1, n2});
+    }
+    // T, N and s interpolated (unnormalized) at texel (2, 5)'s centre u = 2.5/8, v = 1 - 5.5/8, with
+    // the barycentrics solved by hand.
+    void frame_at_texel(Vec3& T, Vec3& N, float& s) const
+    {
+        const double u = 2.5 / 8, v = 1 - 5.5 / 8;
+        const double ax = 0.05, ay = 0.05, bx = 0.95, by = 0.1, cx = 0.1, cy = 0.95;
+        const double det = (bx - ax) * (cy - ay) - (cx - ax) * (by - ay);
+        const double l1 = ((u - ax) * (cy - ay) - (cx - ax) * (v - ay)) / det;
+        const double l2 = ((bx - ax) * (v - ay) - (u - ax) * (by - ay)) / det;
+        const double l0 = 1 - l1 - l2;
+        const Vec3 t0{0.9f, 0.3f, -0.3f}, t1{0.6f, -0.7f, 0.4f}, t2{1.0f, 0.1f, 0.0f};
+        T = t0 * float(l0) + t1 * float(l1) + t2 * float(l2);
+        N = n0 * float(l0) + n1 * float(l1) + n2 * float(l2);
+        s = float(l0 * 1 + l1 * 1 + l2 * -1);
+    }
+};
+
 TEST_F(TangentConvert, TangentToObjectIsTheNormalMapNodeWithUnnormalizedInterpolation)
 {
-    // One triangle with deliberately uneven corner frames, so normalizing T and N per pixel (a
-    // common mistake) would give another answer.
-    TestMesh m;
-    const uint32_t a = m.vertex({0, 0, 0}), b = m.vertex({1, 0, 0.3f}), c = m.vertex({0, 1, -0.2f});
-    const Vec3 n0 = normalize_or(Vec3{0.4f, 0, 1}, kUp), n1 = normalize_or(Vec3{-0.3f, 0.5f, 1}, kUp),
-               n2 = normalize_or(Vec3{0, -0.6f, 1}, kUp);
-    m.face({a, b, c}, {{{0.05f, 0.05f}}, {{0.95f, 0.1f}}, {{0.1f, 0.95f}}}, {n0, n1, n2});
-    const std::vector<float> tangents{0.9f, 0.3f, -0.3f, 1.0f, 0.6f, -0.7f, 0.4f, 1.0f, 1.0f, 0.1f, 0.0f, -1.0f};
+    const UnevenTriangle tri;
+    const TestMesh& m = tri.mesh;
     const int w = 8, h = 8;
     const Vec3 tn = normalize_or(Vec3{0.35f, -0.25f, 0.9f}, kUp);
     std::vector<float> in(size_t(w) * h * 3);
     for (size_t i = 0; i < in.size(); i += 3) in[i] = tn.x, in[i + 1] = tn.y, in[i + 2] = tn.z;
     std::vector<uint8_t> cov;
-    const std::vector<float> out = convert(m, in, w, h, false, 0, &cov, tangents);
-    // Texel (2, 5): centre u = 2.5/8, v = 1 - 5.5/8.
+    const std::vector<float> out = convert(m, in, w, h, false, 0, &cov, tri.tangents);
     const int x = 2, y = 5;
     ASSERT_EQ(cov[size_t(y) * w + x], 1);
-    const double u = 2.5 / 8, v = 1 - 5.5 / 8;
-    // Barycentrics of (u, v) in the UV triangle, solved by hand.
-    const double ax = 0.05, ay = 0.05, bx = 0.95, by = 0.1, cx = 0.1, cy = 0.95;
-    const double det = (bx - ax) * (cy - ay) - (cx - ax) * (by - ay);
-    const double l1 = ((u - ax) * (cy - ay) - (cx - ax) * (v - ay)) / det;
-    const double l2 = ((bx - ax) * (v - ay) - (u - ax) * (by - ay)) / det;
-    const double l0 = 1 - l1 - l2;
-    const Vec3 t0{0.9f, 0.3f, -0.3f}, t1{0.6f, -0.7f, 0.4f}, t2{1.0f, 0.1f, 0.0f};
-    const Vec3 T = t0 * float(l0) + t1 * float(l1) + t2 * float(l2);
-    const Vec3 N = n0 * float(l0) + n1 * float(l1) + n2 * float(l2);
-    const float s = float(l0 * 1 + l1 * 1 + l2 * -1);
+    Vec3 T, N;
+    float s;
+    tri.frame_at_texel(T, N, s);
     const Vec3 B = cross(N, T) * s;
     const Vec3 expected = normalize_or(T * tn.x + B * tn.y + N * tn.z, kUp);
     EXPECT_LT(length(texel(out, w, x, y) - expected), 1e-5f);
     const Vec3 Tn = normalize_or(T, kUp), Nn = normalize_or(N, kUp);
     const Vec3 normalized_frame = normalize_or(Tn * tn.x + cross(Nn, Tn) * s * tn.y + Nn * tn.z, kUp);
     EXPECT_GT(length(normalized_frame - expected), 1e-3f);  // the negative control differs
+}
+
+TEST_F(TangentConvert, TheUnitNormalFrameNormalizesOnlyTheInterpolatedNormal)
+{
+    // Cycles' Normal Map node from Blender 5.3 on: N normalized, T and s as interpolated.
+    const UnevenTriangle tri;
+    const int w = 8, h = 8, x = 2, y = 5;
+    const Vec3 tn = normalize_or(Vec3{0.35f, -0.25f, 0.9f}, kUp);
+    std::vector<float> in(size_t(w) * h * 3);
+    for (size_t i = 0; i < in.size(); i += 3) in[i] = tn.x, in[i + 1] = tn.y, in[i + 2] = tn.z;
+    const std::vector<float> out =
+        convert(tri.mesh, in, w, h, false, 0, nullptr, tri.tangents, NDFB_FRAME_NORMAL_UNIT);
+    Vec3 T, N;
+    float s;
+    tri.frame_at_texel(T, N, s);
+    const Vec3 Nn = normalize_or(N, kUp);
+    const Vec3 expected = normalize_or(T * tn.x + cross(Nn, T) * s * tn.y + Nn * tn.z, kUp);
+    EXPECT_LT(length(texel(out, w, x, y) - expected), 1e-5f);
+    const Vec3 interpolated = normalize_or(T * tn.x + cross(N, T) * s * tn.y + N * tn.z, kUp);
+    EXPECT_GT(length(interpolated - expected), 1e-3f);  // the two rules differ here
+    // And the inverse is exact for this frame too.
+    const std::vector<float> back =
+        convert(tri.mesh, out, w, h, true, 0, nullptr, tri.tangents, NDFB_FRAME_NORMAL_UNIT);
+    EXPECT_LT(length(texel(back, w, x, y) - tn), 2e-6f);
+}
+
+TEST_F(TangentConvert, AnUnknownFrameNormalIsRefusedByName)
+{
+    const UnevenTriangle tri;
+    std::vector<float> in(8 * 8 * 3, 0.0f), out(in.size());
+    for (size_t i = 2; i < in.size(); i += 3) in[i] = 1.0f;
+    const ndfb_mesh v = mesh_view(tri.mesh);
+    ndfb_space_options o;
+    ndfb_space_options_init(&o);
+    o.frame_normal = 2;
+    EXPECT_EQ(ndfb_tangent_to_object(ctx_, &v, nullptr, 0, in.data(), 8, 8, in.size(), &o, out.data(), nullptr),
+              NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(ndfb_last_error(ctx_)).find("frame_normal"), std::string::npos) << ndfb_last_error(ctx_);
+    // A caller compiled before the field existed (struct_size without it) gets the default.
+    o.struct_size = offsetof(ndfb_space_options, frame_normal);
+    EXPECT_EQ(ndfb_tangent_to_object(ctx_, &v, nullptr, 0, in.data(), 8, 8, in.size(), &o, out.data(), nullptr),
+              NDFB_OK)
+        << ndfb_last_error(ctx_);
 }
 
 TEST_F(TangentConvert, ObjectToTangentIsTheExactInverse)

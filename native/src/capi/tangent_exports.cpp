@@ -82,10 +82,16 @@ SpaceSettings to_space(const ndfb_space_options* o)
 {
     SpaceSettings s;
     if (!o) return s;
-    // ndfb_space_options has not grown since ABI 1 first shipped: every field is read.
-    require_struct_size(o, "space options", sizeof(ndfb_space_options), "ndfb_space_options_init");
+    require_struct_size(o, "space options", NDFB_SIZE_THROUGH(ndfb_space_options, threads),
+                        "ndfb_space_options_init");
     s.padding = o->padding;
     s.threads = to_threads(o->threads);
+    if (o->struct_size >= NDFB_SIZE_THROUGH(ndfb_space_options, frame_normal)) {
+        require(o->frame_normal == NDFB_FRAME_NORMAL_INTERPOLATED || o->frame_normal == NDFB_FRAME_NORMAL_UNIT,
+                "space options frame_normal must be NDFB_FRAME_NORMAL_INTERPOLATED (0) or NDFB_FRAME_NORMAL_UNIT "
+                "(1), got " + std::to_string(o->frame_normal));
+        s.unit_normal = o->frame_normal == NDFB_FRAME_NORMAL_UNIT;
+    }
     return s;
 }
 
@@ -209,6 +215,7 @@ NDFB_API void ndfb_space_options_init(ndfb_space_options* options)
     options->struct_size = sizeof *options;
     options->padding = SpaceSettings{}.padding;
     options->threads = 0;
+    options->frame_normal = NDFB_FRAME_NORMAL_INTERPOLATED;
 }
 
 NDFB_API ndfb_status ndfb_object_to_tangent(ndfb_context ctx, const ndfb_mesh* mesh, const float* tangents,

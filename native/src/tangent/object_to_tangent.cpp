@@ -87,6 +87,8 @@ size_t convert_normal_map(const MeshInput& mesh, std::span<const float> tangents
                      TexelFrame f;
                      f.t = {float(T[0]), float(T[1]), float(T[2])};
                      f.n = {float(N[0]), float(N[1]), float(N[2])};
+                     // A zero N stays zero: the frame then has no inverse, as in the renderer.
+                     if (settings.unit_normal) f.n = normalize_or(f.n, f.n);
                      f.b = cross(f.n, f.t) * float(s);
                      const size_t i = size_t(y) * width + x;
                      const Vec3 v{in[3 * i], in[3 * i + 1], in[3 * i + 2]};

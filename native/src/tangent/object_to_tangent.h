@@ -3,7 +3,8 @@
 // that node gives back the object-space normals (the "exact inverse" rule, Mikkelsen 2008 §3.4).
 //
 // Per texel: barycentric weights b of the covering triangle, then, all unnormalized as the node
-// interpolates them, T = Σ b t_k, s = Σ b s_k, N = Σ b n_k, B = s cross(N, T), and
+// interpolates them, T = Σ b t_k, s = Σ b s_k, N = Σ b n_k (normalized where the renderer does so:
+// Cycles from Blender 5.3 on), B = s cross(N, T), and
 //   tangent -> object: n = normalize(x T + y B + z N)
 //   object -> tangent: (x, y, z) = normalize([T B N]^-1 n)
 #pragma once
@@ -21,6 +22,7 @@ enum class SpaceDirection { object_to_tangent, tangent_to_object };
 struct SpaceSettings {
     uint32_t padding = 16;  // rings of texels grown around islands; 0xffffffff fills the image
     int threads = 0;
+    bool unit_normal = false;  // normalize the interpolated N before building the frame
 };
 
 // The node's forward map for one texel, and its inverse. frame: T, B, N as above.
