@@ -1,5 +1,5 @@
-"""Where Blender 3.4, 4.2 LTS, 4.5 LTS and 5.0 differ in what the add-on uses: each difference in
-one function here, so that the rest of the add-on (and its tests) names no version."""
+"""Where Blender 3.4, 4.2 LTS, 4.5 LTS, 5.0 and 5.3 differ in what the add-on uses: each difference
+in one function here, so that the rest of the add-on (and its tests) names no version."""
 import re
 
 import bpy
@@ -76,6 +76,13 @@ def eevee_next():
 def eevee_engine():
     """The render engine id of EEVEE: BLENDER_EEVEE in 3.x and 5.0+, BLENDER_EEVEE_NEXT in 4.2-4.x."""
     return "BLENDER_EEVEE_NEXT" if eevee_next() and bpy.app.version < (5, 0, 0) else "BLENDER_EEVEE"
+
+
+def osl_texture_wraps():
+    """Whether Cycles' OSL texture() honours its "wrap" option. Up to 5.1 it does; from 5.2 on
+    (Cycles' own texture cache) a lookup outside [0, 1] is black whatever the wrap mode (5.2.0,
+    5.2.3 and 5.3.0 checked; test_addon_osl checks it in each Blender it runs in)."""
+    return bpy.app.version < (5, 2, 0)
 
 
 def linear_color_space():

@@ -11,8 +11,10 @@ through the EEVEE output; its BSDF output, what Cycles draws, is the Script node
 instead. The group's inputs, its node in the material, the bypass, the record, a re-bake and
 Revert are the stock group's (bake.py and nodes.py handle it as any group).
 
-Where it is offered (status): the Blender build has OSL, the scene renders with Cycles' Open Shading
-Language on the CPU. Not on the GPU: OptiX runs OSL, but Cycles' GPU texture() loads a named file
+Where it is offered (status): the Blender build has OSL, up to 5.1, the scene renders with Cycles'
+Open Shading Language on the CPU. Not from 5.2 on: Cycles' texture cache then serves OSL's
+texture() and ignores its wrap mode, so a tiling map reads black outside the first UV tile
+(blender_compat.osl_texture_wraps). Not on the GPU: OptiX runs OSL, but Cycles' GPU texture() loads a named file
 through its own image manager, which keeps level 0 only and takes no ray differentials (Cycles'
 OSLRenderServices::get_texture_handle), so nothing would be filtered. And not for materials whose
 Principled BSDF has coat, sheen, transmission, subsurface or thin film that may matter
@@ -28,7 +30,7 @@ import sys
 
 import bpy
 
-from . import material_scan, nodes, specular_albedo_table, specular_split
+from . import blender_compat, material_scan, nodes, specular_albedo_table, specular_split
 from .node_builders import GROUP_VERSION, TAG
 
 SHADER_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "osl", "ndfbake_lobes.osl")
@@ -85,6 +87,10 @@ def build_status():
         return False, "this Blender build has no OSL (bpy.app.build_options.cycles_osl is False)"
     if not _compiler_ready():
         return False, "this Blender build has OSL but Cycles' Script node compiler does not load"
+    if not blender_compat.osl_texture_wraps():
+        return False, ("Blender %d.%d's Cycles ignores the wrap mode of OSL texture lookups (black outside the "
+                       "first UV tile, since 5.2), which the OSL variant's tiling needs: bake with Stock Nodes"
+                       % bpy.app.version[:2])
     return True, ("OSL is available in this Blender build: the OSL variant needs Cycles with Open Shading "
                   "Language on the CPU")
 

@@ -18,6 +18,8 @@ Run: python tests/blender/test_addon_osl.py -- LIB   (the bpy module; or blender
   and a flat sphere, within 0.1 degrees.
 - The panel's conditions: not offered with OSL off or on the GPU (status says why), refused for a
   material with a coat; Revert removes the Script node's group and text and restores the material.
+- Not offered where Cycles' texture() ignores the wrap mode (5.2 on), checked by a lookup outside
+  [0, 1] in the Blender that runs the test; there only that refusal is tested.
 Renders are 16² to 32², 4 samples.
 """
 import math
@@ -99,6 +101,70 @@ def test_offered_only_where_cycles_runs_osl_on_the_cpu():
         error = h.raised(bake.BakeError, lambda: bake.bake_material(material, bake.BakeSettings(shader="OSL")),
                          "an OSL bake of a coated material")
         h.expect(error.code == "OSL_UNSUPPORTED" and "Coat Weight" in error.message, error.message)
+        h.expect(not bake.is_baked(material), "a refused bake left a record")
+
+
+WRAP_PROBE = """
+shader wrap_probe(string File = "", output closure color BSDF = 0, output color Outside = 0)
+{
+  Outside = texture(File, u * 0.5 + 2.25, v * 0.5 - 1.75, "wrap", "periodic");
+}
+"""
+
+
+def test_offered_only_where_texture_lookups_wrap():
+    """The OSL variant reads its tiling lobe files with texture(..., "wrap", "periodic"); Cycles
+    from 5.2 on ignores the wrap mode (black outside [0, 1]). A Script node samples a red image at
+    s in [2.25, 2.75], t in [-1.75, -1.25]: where that is red, blender_compat.osl_texture_wraps must
+    say so and the variant is offered; where black, the variant is refused by name and a bake asked
+    for it leaves the material as it was."""
+    from ndfbake import bake, blender_compat, osl_group
+    with h.scratch_dir() as directory:
+        h.reset_scene()
+        red = bpy.data.images.new("red", 4, 4, float_buffer=True)
+        red.pixels.foreach_set(np.tile(np.float32([0.8, 0.1, 0.05, 1.0]), 16))
+        red.filepath_raw = os.path.join(directory, "red.exr")
+        red.file_format = "OPEN_EXR"
+        red.save()
+        material = bpy.data.materials.new("Wrap Probe")
+        tree = h.enable_nodes(material)
+        script = tree.nodes.new("ShaderNodeScript")
+        script.mode = "INTERNAL"
+        script.script = bpy.data.texts.new("wrap_probe.osl")
+        script.script.write(WRAP_PROBE)
+        ok, messages = osl_group.compile_script(script)
+        h.expect(ok and "Outside" in script.outputs, "the probe does not compile: %s" % messages)
+        script.inputs["File"].default_value = red.filepath_raw
+        emission = tree.nodes.new("ShaderNodeEmission")
+        tree.links.new(script.outputs["Outside"], emission.inputs["Color"])
+        output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+        tree.links.new(emission.outputs[0], output.inputs["Surface"])
+        h.plane_with(material)
+        scene = bpy.context.scene
+        bpy.ops.object.camera_add(location=(0.0, 0.0, 3.0))
+        scene.camera = bpy.context.active_object
+        scene.camera.data.type = "ORTHO"
+        scene.camera.data.ortho_scale = 1.0
+        h.configure_render(scene, 8, 8, cycles_samples=1)
+        osl_scene(scene)
+        centre = h.render_pixels(scene, os.path.join(directory, "probe.exr"))[4, 4, :3]
+        wraps = bool(centre[0] > 0.4)
+        print("  a periodic lookup outside [0, 1] reads %s: the wrap mode is %s" % (
+            np.round(centre, 3), "honoured" if wraps else "ignored"))
+        h.expect(wraps == blender_compat.osl_texture_wraps(),
+                 "blender_compat.osl_texture_wraps() is %s, but Cycles %s the wrap mode here" % (
+                     blender_compat.osl_texture_wraps(), "honours" if wraps else "ignores"))
+        if wraps:
+            return
+        available, why = osl_group.build_status()
+        h.expect(not available and "wrap mode" in why and "Stock Nodes" in why, why)
+        material = h.baked_scene(directory, pattern="bumps", size=16)
+        osl_scene(bpy.context.scene)
+        before = h.dump_material(material)
+        error = h.raised(bake.BakeError, lambda: bake.bake_material(material, bake.BakeSettings(shader="OSL")),
+                         "an OSL bake where texture() does not wrap")
+        h.expect(error.code == "OSL_UNAVAILABLE" and "wrap mode" in error.message, error.message)
+        h.expect(not h.differences(before, h.dump_material(material)), "the refused bake changed the material")
         h.expect(not bake.is_baked(material), "a refused bake left a record")
 
 
@@ -229,5 +295,11 @@ if __name__ == "__main__":
         print("skipped: this Blender has no OSL (bpy.app.build_options.cycles_osl is False)")
         h.exit_now(0)
     h.import_addon()
-    h.run([test_bake_compiles_renders_and_reverts, test_offered_only_where_cycles_runs_osl_on_the_cpu,
-           test_flat_texel_matches_the_stock_group, test_lobe_normals_are_the_normal_map_nodes])
+    from ndfbake import blender_compat
+    tests = [test_offered_only_where_texture_lookups_wrap]
+    if blender_compat.osl_texture_wraps():
+        tests += [test_bake_compiles_renders_and_reverts, test_offered_only_where_cycles_runs_osl_on_the_cpu,
+                  test_flat_texel_matches_the_stock_group, test_lobe_normals_are_the_normal_map_nodes]
+    else:
+        print("the OSL variant is refused in this Blender (texture() does not wrap): only its refusal is tested")
+    h.run(tests)
