@@ -272,26 +272,40 @@ def address_levels(tree, group_tree, lookups, atlas, repeat, uv, y):
     return nodes
 
 
+def bilinear_closest(tree, image, corner_uvs, fx, fy, location, alpha=True, name=None):
+    """Bilinear filtering in nodes: four Closest lookups of `image` at the texel centres
+    `corner_uvs` (sockets, in TAP_CORNERS order) weighted by the fractions fx, fy through
+    bilinear_group. Returns that group node (outputs Color and Alpha, Alpha linked where `alpha`).
+    The lookups are named "<name> <corner>" where `name` is given."""
+    x, y = location
+    bilinear = tree.nodes.new("ShaderNodeGroup")
+    bilinear.node_tree = bilinear_group()
+    bilinear.location = (x, y)
+    for i, (corner, uv) in enumerate(zip(TAP_CORNERS, corner_uvs)):
+        tex = tree.nodes.new("ShaderNodeTexImage")
+        if name:
+            tex.name = tex.label = "%s %s" % (name, corner)
+        tex.image = image
+        tex.interpolation = "Closest"  # the taps are texel centres; filtering is done in nodes
+        tex.extension = "EXTEND"
+        tex.location = (x - 250, y - 60 * i)
+        tex.hide = True
+        tree.links.new(uv, tex.inputs["Vector"])
+        tree.links.new(tex.outputs["Color"], bilinear.inputs["Color " + corner])
+        if alpha:
+            tree.links.new(tex.outputs["Alpha"], bilinear.inputs["Alpha " + corner])
+    tree.links.new(fx, bilinear.inputs["Fx"])
+    tree.links.new(fy, bilinear.inputs["Fy"])
+    return bilinear
+
+
 def sample_atlas(tree, image, taps, blend, j, y):
     """Lobe j's RGBA at the shading point: bilinear in each of the two levels, blended."""
     colors, alphas = [], []
     for k, tap in enumerate(taps):
-        bilinear = tree.nodes.new("ShaderNodeGroup")
-        bilinear.node_tree = bilinear_group()
-        bilinear.location = (-1000, y - 300 * k)
-        for i, corner in enumerate(TAP_CORNERS):
-            tex = tree.nodes.new("ShaderNodeTexImage")
-            tex.name = tex.label = "Lobe %d level %s %s" % (j, "low" if k == 0 else "high", corner)
-            tex.image = image
-            tex.interpolation = "Closest"  # the taps are texel centres; filtering is done in nodes
-            tex.extension = "EXTEND"
-            tex.location = (-1250, y - 300 * k - 60 * i)
-            tex.hide = True
-            tree.links.new(tap.outputs["UV " + corner], tex.inputs["Vector"])
-            tree.links.new(tex.outputs["Color"], bilinear.inputs["Color " + corner])
-            tree.links.new(tex.outputs["Alpha"], bilinear.inputs["Alpha " + corner])
-        tree.links.new(tap.outputs["Fx"], bilinear.inputs["Fx"])
-        tree.links.new(tap.outputs["Fy"], bilinear.inputs["Fy"])
+        bilinear = bilinear_closest(tree, image, [tap.outputs["UV " + c] for c in TAP_CORNERS], tap.outputs["Fx"],
+                                    tap.outputs["Fy"], (-1000, y - 300 * k),
+                                    name="Lobe %d level %s" % (j, "low" if k == 0 else "high"))
         colors.append(bilinear.outputs["Color"])
         alphas.append(bilinear.outputs["Alpha"])
     return (_mix(tree, "VECTOR", blend, colors[0], colors[1], (-850, y)),

@@ -167,26 +167,17 @@ def _table_lookup_taps(tree, image, column, v, slice_index, location):
         high = _math(tree, "ADD", low, 1.0 / size, location=(x + 500, yy))
         taps.append((low, high, _math(tree, "SUBTRACT", position, first, location=(x + 300, yy - 50))))
     (u0, u1, fx), (v0, v1, fy) = taps
-    bilinear = tree.nodes.new("ShaderNodeGroup")
-    bilinear.node_tree = lod_nodes.bilinear_group()
-    bilinear.location = (x + 900, y)
-    for corner, (u, row) in zip(lod_nodes.TAP_CORNERS, ((u0, v0), (u1, v0), (u0, v1), (u1, v1))):
+    corner_uvs = []
+    for i, (u, row) in enumerate(((u0, v0), (u1, v0), (u0, v1), (u1, v1))):  # lod_nodes.TAP_CORNERS' order
         uv = tree.nodes.new("ShaderNodeCombineXYZ")
-        uv.location = (x + 600, y)
+        uv.location = (x + 600, y - 60 * i)
+        uv.hide = True
         tree.links.new(u, uv.inputs["X"])
         tree.links.new(row, uv.inputs["Y"])
-        tex = tree.nodes.new("ShaderNodeTexImage")
-        tex.image = image
-        tex.interpolation = "Closest"
-        tex.extension = "EXTEND"
-        tex.location = (x + 750, y)
-        tex.hide = True
-        tree.links.new(uv.outputs["Vector"], tex.inputs["Vector"])
-        tree.links.new(tex.outputs["Color"], bilinear.inputs["Color " + corner])
-    tree.links.new(fx, bilinear.inputs["Fx"])
-    tree.links.new(fy, bilinear.inputs["Fy"])
+        corner_uvs.append(uv.outputs["Vector"])
+    bilinear = lod_nodes.bilinear_closest(tree, image, corner_uvs, fx, fy, (x + 1000, y), alpha=False)
     rgb = tree.nodes.new("ShaderNodeSeparateXYZ")
-    rgb.location = (x + 1050, y)
+    rgb.location = (x + 1150, y)
     tree.links.new(bilinear.outputs["Color"], rgb.inputs["Vector"])
     return rgb.outputs
 
