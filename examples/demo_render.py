@@ -67,9 +67,10 @@ def save_pixels(pixels, path, scene=None):
     return path
 
 
-def render(scene, engine, path, samples, percentage=100, seed=0):
+def render(scene, engine, path, samples, percentage=100, seed=0, border=None):
     """Renders the scene with `engine` into `path` (.exr, linear float) and returns its RGB pixels
-    (H, W, 3), rows bottom first."""
+    (H, W, 3), rows bottom first. border: (x0, x1, y0, y1) in [0, 1], y from the bottom (mask_border):
+    only that part is rendered, the rest of the full-size image is black."""
     scene.render.engine = engine
     scene.render.resolution_percentage = percentage
     if engine == "CYCLES":
@@ -80,11 +81,27 @@ def render(scene, engine, path, samples, percentage=100, seed=0):
     settings = scene.render.image_settings
     settings.file_format, settings.color_mode, settings.color_depth = "OPEN_EXR", "RGB", "32"
     scene.render.filepath = path
+    scene.render.use_border = border is not None
+    scene.render.use_crop_to_border = False
+    if border is not None:
+        (scene.render.border_min_x, scene.render.border_max_x,
+         scene.render.border_min_y, scene.render.border_max_y) = border
     try:
         bpy.ops.render.render(write_still=True)
     finally:
         scene.render.resolution_percentage = 100
+        scene.render.use_border = False
     return read_exr(path)
+
+
+def mask_border(mask, margin=1):
+    """The render border (x0, x1, y0, y1) around the pixels of `mask` (rows bottom first), `margin`
+    pixels wider on each side: what render(border=...) takes."""
+    rows, columns = np.nonzero(mask)
+    height, width = mask.shape
+    x0, x1 = max(columns.min() - margin, 0), min(columns.max() + 1 + margin, width)
+    y0, y1 = max(rows.min() - margin, 0), min(rows.max() + 1 + margin, height)
+    return (x0 / width, x1 / width, y0 / height, y1 / height)
 
 
 def normal_map_textures(material):
