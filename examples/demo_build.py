@@ -69,11 +69,34 @@ def enable_nodes(id_with_nodes):
     return blender_compat.enable_nodes(id_with_nodes)
 
 
-def write_normal_map(path, pattern, size, seed):
+def write_normal_map(path, pattern="bumps", size=64, seed=3):
+    """A synthetic tangent-space normal map saved by the library (8-bit PNG for .png), or by
+    Blender where the library writes no image files (the add-on's, in a Blender without Debian
+    12's OpenImageIO: the Blender tests in the Debian 13 chroot)."""
     from ndfbake import native
     with native.load().context() as ctx:
         with ctx.synthesize(pattern, size, size, seed) as normal_map:
-            normal_map.save(path)
+            try:
+                normal_map.save(path)
+            except native.Error as e:
+                if e.status != native.ERROR_UNSUPPORTED_FORMAT or not path.endswith(".png"):
+                    raise
+                save_normals_png(normal_map.read(), path)
+    return path
+
+
+def save_normals_png(normals, path):
+    """Unit normals ((height, width, 3), rows top to bottom) as an 8-bit PNG written by Blender: for
+    a library that writes no image files (the add-on's)."""
+    height, width, _ = normals.shape
+    image = bpy.data.images.new("ndfb-normals", width, height, alpha=False)
+    rgba = np.ones((height, width, 4), dtype=np.float32)
+    rgba[..., :3] = normals[::-1] * 0.5 + 0.5  # Blender's rows run bottom to top
+    image.pixels.foreach_set(rgba.ravel())
+    image.filepath_raw = path
+    image.file_format = "PNG"
+    image.save()
+    bpy.data.images.remove(image)
     return path
 
 
