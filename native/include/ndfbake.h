@@ -377,7 +377,7 @@ NDFB_API ndfb_status ndfb_mesh_diagnose(ndfb_context ctx, const ndfb_mesh* mesh,
 /* Object-space <-> tangent-space normal maps, by rasterizing the mesh in UV space. Per texel the
  * frame is rebuilt exactly as a renderer's normal map does it: barycentric, unnormalized
  * interpolation of the corner tangent T, sign s and normal N (MikkTSpace's rule, and Cycles' Normal
- * Map node up to Blender 5.2), or N normalized first (frame_normal below), B = s * cross(N, T),
+ * Map node up to Blender 5.0), or N normalized first (frame_normal below), B = s * cross(N, T),
  * n_object = normalize(x T + y B + z N). ndfb_object_to_tangent applies the exact inverse of that
  * map, so rendering its output through the node gives back the object-space normals.
  * Images: width*height*3 floats in [-1, 1] (count = width*height*3), rows top to bottom (row 0 at
@@ -397,8 +397,8 @@ typedef struct ndfb_space_options {
 /* The frame's N. The two differ where the corner normals of a triangle differ (a curved low-poly
  * surface): up to ~10 degrees on Suzanne's ears. */
 typedef enum ndfb_frame_normal {
-    NDFB_FRAME_NORMAL_INTERPOLATED = 0, /* as interpolated: MikkTSpace's rule; Cycles up to 5.2 */
-    NDFB_FRAME_NORMAL_UNIT = 1          /* normalized before use: Cycles from 5.3 on */
+    NDFB_FRAME_NORMAL_INTERPOLATED = 0, /* as interpolated: MikkTSpace's rule; Cycles up to 5.0 */
+    NDFB_FRAME_NORMAL_UNIT = 1          /* normalized before use: Cycles from 5.1 on */
 } ndfb_frame_normal;
 /* coverage (may be NULL): width*height bytes, 0 = outside every island and the padding,
  * 1 = inside a triangle, 2 = padding. Texels outside both hold (0, 0, 1) in tangent space and

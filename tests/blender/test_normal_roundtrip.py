@@ -6,7 +6,7 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 1. A mirrored Suzanne (triangulated, copy's UVs mirrored beside the original's) gets a bumpy
    material; Cycles bakes its shading normals in OBJECT space: the object-space map O.
 2. ndfb_object_to_tangent converts O to a tangent-space map T (frames computed by ndfbake, with
-   the frame normal this Blender's Cycles uses: as interpolated up to 5.2, normalized from 5.3).
+   the frame normal this Blender's Cycles uses: as interpolated up to 5.0, normalized from 5.1).
 3. A second material renders T through an Image Texture and the Normal Map node (tangent space,
    Cycles computing its own MikkTSpace tangents); Cycles bakes its shading normals in OBJECT
    space again: O'.
@@ -131,9 +131,9 @@ def normal_map_material(image, uv_name):
 
 def cycles_frame_normal():
     """The frame normal of Cycles' Normal Map node (tangent space) in this Blender: the barycentric
-    interpolation of the corner normals, as is, up to 5.2 (5.0, 5.1.0 and 5.2.3 checked); normalized
-    first from 5.3 on (5.3.0: up to 14.5 degrees apart on Suzanne's curved low-poly ears)."""
-    return FRAME_NORMAL_UNIT if bpy.app.version >= (5, 3, 0) else FRAME_NORMAL_INTERPOLATED
+    interpolation of the corner normals, as is, up to 5.0; normalized first from 5.1 on (5.1.0, 5.2.3
+    and 5.3.0 checked: up to 14.5 degrees apart on Suzanne's curved low-poly ears)."""
+    return FRAME_NORMAL_UNIT if bpy.app.version >= (5, 1, 0) else FRAME_NORMAL_INTERPOLATED
 
 
 def round_trip(lib, obj, arrays, original, rule):

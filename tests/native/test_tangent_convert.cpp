@@ -134,7 +134,7 @@ TEST_F(TangentConvert, TangentToObjectIsTheNormalMapNodeWithUnnormalizedInterpol
 
 TEST_F(TangentConvert, TheUnitNormalFrameNormalizesOnlyTheInterpolatedNormal)
 {
-    // Cycles' Normal Map node from Blender 5.3 on: N normalized, T and s as interpolated.
+    // Cycles' Normal Map node from Blender 5.1 on: N normalized, T and s as interpolated.
     const UnevenTriangle tri;
     const int w = 8, h = 8, x = 2, y = 5;
     const Vec3 tn = normalize_or(Vec3{0.35f, -0.25f, 0.9f}, kUp);

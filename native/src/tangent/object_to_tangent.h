@@ -4,7 +4,7 @@
 //
 // Per texel: barycentric weights b of the covering triangle, then, all unnormalized as the node
 // interpolates them, T = Σ b t_k, s = Σ b s_k, N = Σ b n_k (normalized where the renderer does so:
-// Cycles from Blender 5.3 on), B = s cross(N, T), and
+// Cycles from Blender 5.1 on), B = s cross(N, T), and
 //   tangent -> object: n = normalize(x T + y B + z N)
 //   object -> tangent: (x, y, z) = normalize([T B N]^-1 n)
 #pragma once
