@@ -6,7 +6,7 @@
 # certificate chain, so the wheels are downloaded here (a pip of our own, for CPython 3.13 and
 # every manylinux the chroot's glibc runs) into the chroot, installed from there without the
 # index, then deleted.
-#   bash scripts/install-bpy-debian13.sh SERIES...      (install-deps.sh names 5.3)
+#   bash scripts/install-bpy-debian13.sh SERIES...      (install-deps.sh names 5.2 5.3)
 # Run as root, after install-debian13-blender.sh.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -16,7 +16,8 @@ cache=${NDFBAKE_CACHE:-$HOME/.cache/ndfbake}
 in_chroot() { bash "$here/in-chroot.sh" "$root" /tmp -- "$@"; }
 # pip download takes the platform tags literally (no older manylinux implied): name each one the
 # chroot's glibc (2.41 in Debian 13) runs, from manylinux2014 (2.17) up.
-glibc_minor=$(chroot "$root" ldd --version | head -1 | sed 's/.* 2\.\([0-9]*\)$/\1/')
+glibc=$(chroot "$root" getconf GNU_LIBC_VERSION)   # "glibc 2.41"
+glibc_minor=${glibc##*.}
 platforms=(--platform manylinux2014_x86_64)
 for minor in $(seq 17 "$glibc_minor"); do platforms+=(--platform "manylinux_2_${minor}_x86_64"); done
 for s in "$@"; do
