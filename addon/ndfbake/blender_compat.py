@@ -1,5 +1,5 @@
-"""Where Blender 3.4, 4.2 LTS, 4.5 LTS, 5.0 and 5.3 differ in what the add-on uses: each difference
-in one function here, so that the rest of the add-on (and its tests) names no version."""
+"""Where Blender 3.4, 4.2 LTS, 4.5 LTS and 5.x differ in what the add-on uses: each difference in
+one function here, so that the rest of the add-on (and its tests) names no version."""
 import re
 
 import bpy
