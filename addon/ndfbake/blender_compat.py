@@ -78,6 +78,14 @@ def eevee_engine():
     return "BLENDER_EEVEE_NEXT" if eevee_next() and bpy.app.version < (5, 0, 0) else "BLENDER_EEVEE"
 
 
+def normal_map_normalizes_normal():
+    """Whether Cycles' Normal Map node (tangent space) normalizes the interpolated corner normal
+    before it builds the frame: from 5.1 on (5.1.0, 5.2.3 and 5.3.0 checked), as is before. What a
+    tangent-space map converted for this Blender must assume (ndfb_space_options.frame_normal;
+    tests/blender/test_normal_roundtrip.py)."""
+    return bpy.app.version >= (5, 1, 0)
+
+
 def osl_texture_wraps():
     """Whether Cycles' OSL texture() honours its "wrap" option. Up to 5.1 it does; from 5.2 on
     (Cycles' own texture cache) a lookup outside [0, 1] is black whatever the wrap mode (5.2.0,

@@ -131,9 +131,9 @@ def normal_map_material(image, uv_name):
 
 def cycles_frame_normal():
     """The frame normal of Cycles' Normal Map node (tangent space) in this Blender: the barycentric
-    interpolation of the corner normals, as is, up to 5.0; normalized first from 5.1 on (5.1.0, 5.2.3
-    and 5.3.0 checked: up to 14.5 degrees apart on Suzanne's curved low-poly ears)."""
-    return FRAME_NORMAL_UNIT if bpy.app.version >= (5, 1, 0) else FRAME_NORMAL_INTERPOLATED
+    interpolation of the corner normals, as is, up to 5.0; normalized first from 5.1 on (up to 14.5
+    degrees apart on Suzanne's curved low-poly ears)."""
+    return FRAME_NORMAL_UNIT if blender_compat.normal_map_normalizes_normal() else FRAME_NORMAL_INTERPOLATED
 
 
 def round_trip(lib, obj, arrays, original, rule):
