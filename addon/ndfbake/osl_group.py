@@ -14,11 +14,11 @@ Revert are the stock group's (bake.py and nodes.py handle it as any group).
 Where it is offered (status): the Blender build has OSL, up to 5.1, the scene renders with Cycles'
 Open Shading Language on the CPU. Not from 5.2 on: Cycles' texture cache then serves OSL's
 texture() and ignores its wrap mode, so a tiling map reads black outside the first UV tile
-(blender_compat.osl_texture_wraps). Not on the GPU: OptiX runs OSL, but Cycles' GPU texture()
-loads a named file through its own image manager, which keeps level 0 only and takes no ray
-differentials (Cycles' OSLRenderServices::get_texture_handle), so nothing would be filtered. And not for materials whose
-Principled BSDF has coat, sheen, transmission, subsurface or thin film that may matter
-(unsupported_inputs): the shader draws the specular-split rule only (specular_split.py),
+(blender_compat.osl_texture_wraps). Not on the GPU: OptiX runs OSL, but Cycles' GPU texture() loads
+a named file through its own image manager, which keeps level 0 only and takes no ray differentials
+(Cycles' OSLRenderServices::get_texture_handle), so nothing would be filtered. And not for
+materials whose Principled BSDF has coat, sheen, transmission, subsurface or thin film that may
+matter (unsupported_inputs): the shader draws the specular-split rule only (specular_split.py),
 specular lobes over one diffuse at the mean normal, which those layers do not follow.
 
 The Script node reads its files by absolute path (OSL takes no '//' paths): moving the .blend and
