@@ -1,7 +1,10 @@
 """EEVEE Next's scene-linear render depends on the view's exposure: the demo scene's far ground and
 far spheres (mean luminance of the EXR, which no view setting should change), naive and baked,
 at several exposures, with the world's sun extracted (Blender's default) and not
-(docs/rendering.md, "Open problems").
+(docs/rendering.md, "Open problems"). The cause is EEVEE Next's film: it weights each sample of the
+Combined pass by 1 / (4 + luma * s) with s = exposure squared (Blender's pow2f), so 0 averages and
+any other exposure, above or below, darkens sparkly pixels (examples/eevee_far_spheres.py shows
+the symmetry about 0).
 
     python examples/eevee_exposure_study.py -- --out DIR [--world interior] [--samples 64]
     blender -b --factory-startup --python examples/eevee_exposure_study.py -- --out DIR ...
