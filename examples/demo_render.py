@@ -104,6 +104,16 @@ def mask_border(mask, margin=1):
     return (x0 / width, x1 / width, y0 / height, y1 / height)
 
 
+def border_mask(border, shape):
+    """Bool mask (H, W), rows bottom first, of the pixels inside a render border (mask_border's)."""
+    height, width = shape
+    x0, x1 = round(border[0] * width), round(border[1] * width)
+    y0, y1 = round(border[2] * height), round(border[3] * height)
+    mask = np.zeros(shape, dtype=bool)
+    mask[y0:y1, x0:x1] = True
+    return mask
+
+
 def normal_map_textures(material):
     """The Image Texture nodes whose Color feeds a Normal Map node."""
     found = []

@@ -2,14 +2,18 @@
 ground converges against its reference, and ndfbake's image error against naive's, per world.
 
     python examples/world_sweep.py -- --out DIR [--worlds city,forest,...] [--width 128 --height 72]
-            [--samples 16] [--eevee-samples 64] [--converged-samples 128]
+            [--samples 16] [--eevee-samples 64] [--converged-samples 128] [--reference-band-samples 4096]
             [--variants "cycles=4,eevee=4;cycles=0,eevee=1"]
     blender -b --factory-startup --python examples/world_sweep.py -- --out DIR ...
 
 For each world: builds examples/demo_scene.py's scene, renders its references and the naive map
 once (demo_render.render_plain), bakes every material with the defaults an artist gets (demo_scene's
 8 lobes) and renders ndfbake; Cycles' far ground is also rendered at --converged-samples for its
-converged brightness (its 16-spp image error counts noise too). Writes DIR/<world>/ (renders,
+converged brightness (its 16-spp image error counts noise too). The Cycles reference is rendered
+at 256 spp and its far regions' band again at --reference-band-samples, which replaces it there:
+at 256 spp the reference's own noise was most of naive's 16-spp error on the far spheres under
+some worlds (city: 0.62 of 0.93, examples/cycles_noise_study.py), which held ndfbake's ratio there
+near 1 whatever the lobes did. Writes DIR/<world>/ (renders,
 report.json) and DIR/world_sweep.json, and prints the table docs/rendering.md ("Grazing views")
 shows: per world and engine, the far ground's mean luminance over the reference's, and the ratios
 ndfbake / naive of the block error (EEVEE) and of the 16-spp pixel RMSE (Cycles) on the far ground
@@ -32,6 +36,7 @@ import sys
 import time
 
 import bpy
+import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import demo_scene  # noqa: E402
@@ -44,7 +49,8 @@ RATIO_GOAL = 0.5            # ndfbake's error at most half of naive's
 REGIONS = ("ground_far", "spheres_far")
 
 
-def sweep_world(out, world, width, height, samples, eevee_samples, converged_samples, variants, log=print):
+def sweep_world(out, world, width, height, samples, eevee_samples, converged_samples, band_samples, variants,
+                log=print):
     """One world: {variant: {engine: {"brightness": far-ground mean over the reference's,
     "naive_brightness", "ratio": {region: ndfbake / naive}}}}."""
     scene_info = demo_build.fresh_scene(out, width, height, world=world)
@@ -53,6 +59,15 @@ def sweep_world(out, world, width, height, samples, eevee_samples, converged_sam
     masks = demo_render.region_masks(scene, scene_info["ground"], scene_info["far_spheres"])
     images, info = demo_render.render_plain(scene, renders, scene_info["materials"], samples=samples,
                                             eevee_samples=eevee_samples, log=log)
+    if band_samples:
+        band = demo_render.mask_border(np.logical_or.reduce([masks[r] for r in REGIONS]))
+        start = time.perf_counter()
+        pixels = demo_render.render(scene, "CYCLES", os.path.join(renders, "cycles_reference_band.exr"), band_samples,
+                                    seed=1, border=band)
+        inside = demo_render.border_mask(band, pixels.shape[:2])[..., None]
+        images["cycles_reference"] = np.where(inside, pixels, images["cycles_reference"])
+        log("  rendered the far regions' band of the reference at %d spp in %.1f s"
+            % (band_samples, time.perf_counter() - start))
     results = {}
     for name, narrowing in variants.items():
         results[name] = _measure_variant(scene, renders, masks, dict(images), narrowing, samples, eevee_samples,
@@ -128,6 +143,8 @@ def main():
     parser.add_argument("--eevee-samples", type=int, default=64)
     parser.add_argument("--converged-samples", type=int, default=128,
                         help="Cycles samples of the render whose far ground gives the converged brightness")
+    parser.add_argument("--reference-band-samples", type=int, default=4096,
+                        help="Cycles samples of the reference's far regions (0: leave them at 256)")
     parser.add_argument("--variants", default="",
                         help="';'-separated cycles=C,eevee=C grazing constants to measure besides the add-on's")
     args = demo_build.script_arguments(parser)
@@ -140,14 +157,16 @@ def main():
     for world in args.worlds.split(","):
         start = time.perf_counter()
         results[world] = sweep_world(os.path.join(out, world), world, args.width, args.height, args.samples,
-                                     args.eevee_samples, args.converged_samples, variants)
+                                     args.eevee_samples, args.converged_samples, args.reference_band_samples,
+                                     variants)
         print("world_sweep: %s in %.0f s: %s" % (world, time.perf_counter() - start, results[world]), flush=True)
     table = "\n\n".join("%s:\n%s" % (name, format_table({w: r[name] for w, r in results.items()}))
                           for name in variants)
     with open(os.path.join(out, "world_sweep.json"), "w") as f:
         json.dump({"blender": bpy.app.version_string, "width": args.width, "height": args.height,
                    "samples": args.samples, "eevee_samples": args.eevee_samples,
-                   "converged_samples": args.converged_samples, "results": results}, f, indent=2)
+                   "converged_samples": args.converged_samples,
+                   "reference_band_samples": args.reference_band_samples, "results": results}, f, indent=2)
     print("world_sweep.py: Blender %s, %dx%d, %.0f s\n%s" % (bpy.app.version_string, args.width, args.height,
                                                              time.perf_counter() - started, table), flush=True)
 
