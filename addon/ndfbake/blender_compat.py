@@ -73,6 +73,28 @@ def eevee_next():
     return bpy.app.version >= (4, 2, 0)
 
 
+def eevee_film_darkens_with_exposure():
+    """Whether EEVEE's render depends on the view Exposure: EEVEE Next's film weights each sample of
+    the Combined pass by 1 / (4 + luma · s) and sets s with pow2f(exposure), which is exposure²
+    (2^exposure was surely meant). At 0 it averages; at any other value, above or below alike, a
+    pixel whose samples differ much in brightness comes out darker, a baked material's glints most
+    (EEVEE Next picks one lobe a sample). Measured in 4.2, 5.0 and 5.3 (docs/rendering.md, "EEVEE
+    Next's reference"); test_addon_render checks it in each Blender it runs in. EEVEE Legacy
+    averages its samples."""
+    return eevee_next()
+
+
+def eevee_exposure_note(scene):
+    """The panel's line where `scene` renders with EEVEE at an Exposure that darkens a baked
+    material's glints (eevee_film_darkens_with_exposure), else ""."""
+    exposure = scene.view_settings.exposure
+    if scene.render.engine != eevee_engine() or exposure == 0.0 or not eevee_film_darkens_with_exposure():
+        return ""
+    return ("EEVEE darkens sparkly pixels, a baked material's glints most, when the view Exposure is not 0 "
+            "(%g here; Blender's film weighs them by Exposure squared): for final frames keep it at 0 and set "
+            "the brightness with the lights, the world or the compositor." % exposure)
+
+
 def eevee_engine():
     """The render engine id of EEVEE: BLENDER_EEVEE in 3.x and 5.0+, BLENDER_EEVEE_NEXT in 4.2-4.x."""
     return "BLENDER_EEVEE_NEXT" if eevee_next() and bpy.app.version < (5, 0, 0) else "BLENDER_EEVEE"

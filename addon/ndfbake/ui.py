@@ -4,7 +4,7 @@ import textwrap
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
 
-from . import bake, lobe_folders, material_scan, native, nodes, operators
+from . import bake, blender_compat, lobe_folders, material_scan, native, nodes, operators
 
 
 class NDFBakeSettings(bpy.types.PropertyGroup):
@@ -123,6 +123,9 @@ class NDFBAKE_PT_material(bpy.types.Panel):
             _wrapped(layout, "The ndfbake node now holds the material's inputs (colour, roughness, ...): edit "
                              "them there; the original Principled BSDF is kept, bypassed, for Revert.", icon="INFO")
         _wrapped(layout, osl_message, icon="INFO" if osl_available or settings.shader != "OSL" else "ERROR")
+        exposure_note = blender_compat.eevee_exposure_note(context.scene)
+        if exposure_note:
+            _wrapped(layout, exposure_note, icon="INFO")
 
 
 classes = (NDFBakeSettings, NDFBAKE_PT_material)

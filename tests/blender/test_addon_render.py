@@ -12,8 +12,9 @@ emitting, half-transparent material renders as before once baked (the group draw
 once). Then a white furnace: a metal plane whose tiled map puts ~75 texels in a pixel, under a
 uniform sky, keeps the original's energy within 3% once baked, in Cycles and EEVEE (0.885 before
 the shader dropped brdf.h's amplitude; see lobe_nodes.py); and a flat map's bake equals the plain
-material within 2% at view angles down to 2°, in Cycles and in EEVEE Next. Image errors against
-references: test_addon_image_error.py.
+material within 2% at view angles down to 2°, in Cycles and in EEVEE Next. Last, what
+blender_compat says of EEVEE's film and the view exposure, checked on fine emitting checks, and
+the panel's note that follows it. Image errors against references: test_addon_image_error.py.
 """
 import math
 import os
@@ -168,6 +169,72 @@ def test_flat_map_furnace_in_eevee_next():
                      ("dielectric", "half metal, alpha 0.5", "tinted GGX dielectric"))
 
 
+# The checks' luminance in the film-weighting test: well above the 4 of the film's 1 / (4 + luma · s),
+# so that its weighting shows (5.0: ±0.5 render 0.30 of exposure 0).
+CHECK_LUMINANCE = 20.0
+
+
+def test_eevee_film_weighting_follows_the_view_exposure():
+    """What blender_compat.eevee_film_darkens_with_exposure says of this Blender's EEVEE, checked:
+    a plane of fine emitting black-and-white checks (about 37 to a pixel, so that each sample sees
+    one or the other) under a black world, 8² pixels at 16 samples, at view exposures 0, +0.5 and
+    −0.5. Where the film weighs luma by exposure², ±0.5 render the same and darker than 0; where
+    EEVEE averages its samples, all three render the same. The panel's note follows it: shown in
+    EEVEE at −0.5 where the film darkens, never at 0 nor in Cycles."""
+    from ndfbake import blender_compat
+    h.reset_scene()
+    scene = bpy.context.scene
+    material = bpy.data.materials.new("Checks")
+    h.enable_nodes(material)
+    tree = material.node_tree
+    output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    for node in [n for n in tree.nodes if n != output]:
+        tree.nodes.remove(node)
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Scale"].default_value = 400.0
+    checker.inputs["Color1"].default_value = (1.0, 1.0, 1.0, 1.0)
+    checker.inputs["Color2"].default_value = (0.0, 0.0, 0.0, 1.0)
+    emission = tree.nodes.new("ShaderNodeEmission")
+    emission.inputs["Strength"].default_value = CHECK_LUMINANCE
+    tree.links.new(checker.outputs["Color"], emission.inputs["Color"])
+    tree.links.new(emission.outputs["Emission"], output.inputs["Surface"])
+    h.plane_with(material)
+    bpy.ops.object.camera_add(location=(0.0, 0.0, 3.0))
+    scene.camera = bpy.context.active_object
+    scene.camera.data.type = "ORTHO"
+    scene.camera.data.ortho_scale = 1.5
+    h.uniform_world(scene, "Black", (0.0, 0.0, 0.0))
+    h.configure_render(scene, 8, 8, cycles_samples=1, eevee_samples=16)
+    scene.render.engine = blender_compat.eevee_engine()
+    darkens = blender_compat.eevee_film_darkens_with_exposure()
+    means = {}
+    with h.scratch_dir() as directory:
+        for exposure in (0.0, 0.5, -0.5):
+            scene.view_settings.exposure = exposure
+            pixels = h.render_pixels(scene, os.path.join(directory, "checks%+g.exr" % exposure))[..., :3]
+            means[exposure] = float(pixels.mean())
+    print("  EEVEE, fine checks of luminance %g: mean at exposure 0 %.3f, +0.5 %.3f, -0.5 %.3f (the film "
+          "%s)" % (CHECK_LUMINANCE, means[0.0], means[0.5], means[-0.5],
+                   "darkens with exposure²" if darkens else "averages"))
+    h.expect(means[0.0] > 0.2 * CHECK_LUMINANCE, "the checks render %.3f at exposure 0" % means[0.0])
+    h.expect(abs(means[0.5] - means[-0.5]) <= 0.01 * means[0.0],
+             "exposure +0.5 and -0.5 render %.3f and %.3f" % (means[0.5], means[-0.5]))
+    if darkens:
+        h.expect(means[0.5] < 0.85 * means[0.0], "blender_compat says EEVEE's film darkens away from exposure 0, "
+                 "but ±0.5 render %.3f of exposure 0" % (means[0.5] / means[0.0]))
+    else:
+        h.expect(abs(means[0.5] - means[0.0]) <= 0.02 * means[0.0], "blender_compat says EEVEE averages, but "
+                 "exposure 0.5 renders %.3f of exposure 0" % (means[0.5] / means[0.0]))
+    scene.view_settings.exposure = -0.5
+    note = blender_compat.eevee_exposure_note(scene)
+    h.expect(bool(note) == darkens and (not note or "-0.5" in note), "the note at -0.5 in EEVEE: %r" % note)
+    scene.view_settings.exposure = 0.0
+    h.expect(blender_compat.eevee_exposure_note(scene) == "", "a note at exposure 0")
+    scene.view_settings.exposure = -0.5
+    scene.render.engine = "CYCLES"
+    h.expect(blender_compat.eevee_exposure_note(scene) == "", "a note in Cycles")
+
+
 def flat_map_furnace(engine, kinds):
     """The furnace of the two tests above in `engine`, for the materials named in `kinds` (those of
     this Principled version)."""
@@ -235,4 +302,4 @@ if __name__ == "__main__":
     h.import_addon()
     h.run([test_eevee_and_cycles_render_the_baked_material, test_emission_is_drawn_once_as_the_principled_draws_it,
            test_white_furnace_keeps_the_energy_of_the_fine_normals, test_flat_map_furnace_at_every_view_angle,
-           test_flat_map_furnace_in_eevee_next])
+           test_flat_map_furnace_in_eevee_next, test_eevee_film_weighting_follows_the_view_exposure])
