@@ -23,6 +23,10 @@ import image_error  # noqa: E402
 from demo_build import eevee_engine  # noqa: E402
 
 FAR_GROUND = 8.0                 # metres from the camera: where the "far ground" region begins
+# Samples of the Cycles reference's far band (converge_reference_band): at 256 spp its own noise
+# was most of naive's 16-spp error on the far spheres under some worlds (city: 0.62 of 0.93), which
+# holds ndfbake's ratio near 1 whatever the lobes do (docs/rendering.md, "Grazing views").
+REFERENCE_BAND_SAMPLES = 4096
 MAX_SUPERSAMPLED_WIDTH = 1024
 
 
@@ -104,14 +108,21 @@ def mask_border(mask, margin=1):
     return (x0 / width, x1 / width, y0 / height, y1 / height)
 
 
-def border_mask(border, shape):
-    """Bool mask (H, W), rows bottom first, of the pixels inside a render border (mask_border's)."""
-    height, width = shape
-    x0, x1 = round(border[0] * width), round(border[1] * width)
-    y0, y1 = round(border[2] * height), round(border[3] * height)
-    mask = np.zeros(shape, dtype=bool)
-    mask[y0:y1, x0:x1] = True
-    return mask
+def converge_reference_band(scene, directory, images, masks, regions=("ground_far", "spheres_far"),
+                            samples=REFERENCE_BAND_SAMPLES, log=print):
+    """Renders the band of the image that holds `regions` (mask_border) again in Cycles at `samples`
+    and puts it into images["cycles_reference"] there; returns the number of seconds it took."""
+    band = mask_border(np.logical_or.reduce([masks[r] for r in regions]))
+    start = time.perf_counter()
+    pixels = render(scene, "CYCLES", os.path.join(directory, "cycles_reference_band.exr"), samples, seed=1,
+                    border=band)
+    width, height = scene.render.resolution_x, scene.render.resolution_y
+    inside = np.zeros((height, width, 1), dtype=bool)
+    inside[round(band[2] * height):round(band[3] * height), round(band[0] * width):round(band[1] * width)] = True
+    images["cycles_reference"] = np.where(inside, pixels, images["cycles_reference"])
+    seconds = time.perf_counter() - start
+    log("  rendered the reference's far band at %d spp in %.1f s" % (samples, seconds))
+    return seconds
 
 
 def normal_map_textures(material):
@@ -278,7 +289,10 @@ def measure(images, masks):
 
 def format_errors(errors, info=None):
     lines = []
-    cycles_reference = "the Cycles reference%s" % (" (%d spp)" % info["cycles_reference_samples"] if info else "")
+    cycles_reference = "the Cycles reference%s" % (
+        "" if not info else " (%d spp, its far band %d)" % (info["cycles_reference_samples"],
+                                                            info["cycles_reference_band_samples"])
+        if "cycles_reference_band_samples" in info else " (%d spp)" % info["cycles_reference_samples"])
     for figure, table in errors.items():
         title = {"eevee": "EEVEE: block error (4x4 mean luminance) vs %s" % (
                      "the %dx%d supersampled, point-sampled EEVEE render" % ((info["eevee_reference"]["factor"],) * 2)

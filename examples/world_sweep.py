@@ -10,10 +10,8 @@ For each world: builds examples/demo_scene.py's scene, renders its references an
 once (demo_render.render_plain), bakes every material with the defaults an artist gets (demo_scene's
 8 lobes) and renders ndfbake; Cycles' far ground is also rendered at --converged-samples for its
 converged brightness (its 16-spp image error counts noise too). The Cycles reference is rendered
-at 256 spp and its far regions' band again at --reference-band-samples, which replaces it there:
-at 256 spp the reference's own noise was most of naive's 16-spp error on the far spheres under
-some worlds (city: 0.62 of 0.93, examples/cycles_noise_study.py), which held ndfbake's ratio there
-near 1 whatever the lobes did. Writes DIR/<world>/ (renders,
+at 256 spp and its far regions' band again at --reference-band-samples, which replaces it there
+(demo_render.converge_reference_band says why). Writes DIR/<world>/ (renders,
 report.json) and DIR/world_sweep.json, and prints the table docs/rendering.md ("Grazing views")
 shows: per world and engine, the far ground's mean luminance over the reference's, and the ratios
 ndfbake / naive of the block error (EEVEE) and of the 16-spp pixel RMSE (Cycles) on the far ground
@@ -36,7 +34,6 @@ import sys
 import time
 
 import bpy
-import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import demo_scene  # noqa: E402
@@ -60,14 +57,7 @@ def sweep_world(out, world, width, height, samples, eevee_samples, converged_sam
     images, info = demo_render.render_plain(scene, renders, scene_info["materials"], samples=samples,
                                             eevee_samples=eevee_samples, log=log)
     if band_samples:
-        band = demo_render.mask_border(np.logical_or.reduce([masks[r] for r in REGIONS]))
-        start = time.perf_counter()
-        pixels = demo_render.render(scene, "CYCLES", os.path.join(renders, "cycles_reference_band.exr"), band_samples,
-                                    seed=1, border=band)
-        inside = demo_render.border_mask(band, pixels.shape[:2])[..., None]
-        images["cycles_reference"] = np.where(inside, pixels, images["cycles_reference"])
-        log("  rendered the far regions' band of the reference at %d spp in %.1f s"
-            % (band_samples, time.perf_counter() - start))
+        demo_render.converge_reference_band(scene, renders, images, masks, REGIONS, band_samples, log)
     results = {}
     for name, narrowing in variants.items():
         results[name] = _measure_variant(scene, renders, masks, dict(images), narrowing, samples, eevee_samples,
@@ -143,7 +133,7 @@ def main():
     parser.add_argument("--eevee-samples", type=int, default=64)
     parser.add_argument("--converged-samples", type=int, default=128,
                         help="Cycles samples of the render whose far ground gives the converged brightness")
-    parser.add_argument("--reference-band-samples", type=int, default=4096,
+    parser.add_argument("--reference-band-samples", type=int, default=demo_render.REFERENCE_BAND_SAMPLES,
                         help="Cycles samples of the reference's far regions (0: leave them at 256)")
     parser.add_argument("--variants", default="",
                         help="';'-separated cycles=C,eevee=C grazing constants to measure besides the add-on's")
