@@ -289,10 +289,12 @@ def measure(images, masks):
 
 def format_errors(errors, info=None):
     lines = []
-    cycles_reference = "the Cycles reference%s" % (
-        "" if not info else " (%d spp, its far band %d)" % (info["cycles_reference_samples"],
+    cycles_reference = "the Cycles reference"
+    if info and "cycles_reference_band_samples" in info:
+        cycles_reference += " (%d spp, its far band %d)" % (info["cycles_reference_samples"],
                                                             info["cycles_reference_band_samples"])
-        if "cycles_reference_band_samples" in info else " (%d spp)" % info["cycles_reference_samples"])
+    elif info:
+        cycles_reference += " (%d spp)" % info["cycles_reference_samples"]
     for figure, table in errors.items():
         title = {"eevee": "EEVEE: block error (4x4 mean luminance) vs %s" % (
                      "the %dx%d supersampled, point-sampled EEVEE render" % ((info["eevee_reference"]["factor"],) * 2)
