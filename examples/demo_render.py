@@ -20,6 +20,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 if HERE not in sys.path:
     sys.path.insert(0, HERE)
 import image_error  # noqa: E402
+import demo_build  # noqa: E402
 from demo_build import eevee_engine  # noqa: E402
 
 FAR_GROUND = 8.0                 # metres from the camera: where the "far ground" region begins
@@ -236,6 +237,14 @@ def pixel_hits(scene, width, height, sub=2):
                     hit[y, x, k] = index[name]
                     distance[y, x, k] = (location - o).length
     return names, hit, distance
+
+
+def study_scene(directory, world):
+    """demo_build's scene at the image-error test's 128x72 under `world`, built afresh in
+    `directory`, as the EEVEE studies measure it: (its fresh_scene info, the scene, region_masks)."""
+    info = demo_build.fresh_scene(directory, 128, 72, world=world)
+    scene = bpy.context.scene
+    return info, scene, region_masks(scene, info["ground"], info["far_spheres"])
 
 
 def region_masks(scene, ground, far_spheres, far_ground=FAR_GROUND, sub=2):

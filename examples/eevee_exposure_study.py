@@ -36,9 +36,7 @@ def main():
     parser.add_argument("--samples", type=int, default=64)
     args = demo_build.script_arguments(parser)
     out = os.path.abspath(args.out)
-    info = demo_build.fresh_scene(out, 128, 72, world=args.world)
-    scene = bpy.context.scene
-    masks = demo_render.region_masks(scene, info["ground"], info["far_spheres"])
+    info, scene, masks = demo_render.study_scene(out, args.world)
     path = os.path.join(out, "render.exr")
 
     def means(engine, samples):

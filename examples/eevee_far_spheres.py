@@ -140,9 +140,7 @@ def main():
     demo_build.add_world_option(parser)
     args = demo_build.script_arguments(parser)
     out = os.path.abspath(args.out)
-    info = demo_build.fresh_scene(out, 128, 72, world=args.world)
-    scene = bpy.context.scene
-    masks = demo_render.region_masks(scene, info["ground"], info["far_spheres"])
+    info, scene, masks = demo_render.study_scene(out, args.world)
     engine = demo_build.eevee_engine()
 
     def render_both(name):

@@ -33,9 +33,7 @@ def main():
     demo_build.add_world_option(parser)
     args = demo_build.script_arguments(parser)
     out = os.path.abspath(args.out)
-    info = demo_build.fresh_scene(out, 128, 72, world=args.world)
-    scene = bpy.context.scene
-    masks = demo_render.region_masks(scene, info["ground"], info["far_spheres"])
+    info, scene, masks = demo_render.study_scene(out, args.world)
     engine = demo_build.eevee_engine()
     reference = demo_render.render(scene, "CYCLES", os.path.join(out, "reference.exr"), REFERENCE_SAMPLES, seed=1)
     images = {"naive": demo_render.render(scene, engine, os.path.join(out, "naive.exr"), EEVEE_SAMPLES)}

@@ -38,6 +38,19 @@ def render(scene, engine, path):
     return h.render_pixels(scene, path)[..., :3]
 
 
+def straight_down_view(world_name, world_color, size, cycles_samples, eevee_samples):
+    """The current scene seen by an orthographic camera 3 m above the origin looking straight down
+    at 1.5 m of the plane there, under a uniform world, size² pixels (h.configure_render)."""
+    scene = bpy.context.scene
+    bpy.ops.object.camera_add(location=(0.0, 0.0, 3.0))
+    scene.camera = bpy.context.active_object
+    scene.camera.data.type = "ORTHO"
+    scene.camera.data.ortho_scale = 1.5
+    h.uniform_world(scene, world_name, world_color)
+    h.configure_render(scene, size, size, cycles_samples=cycles_samples, eevee_samples=eevee_samples)
+    return scene
+
+
 def test_eevee_and_cycles_render_the_baked_material():
     from ndfbake import bake, blender_compat, native
     with h.scratch_dir() as directory:
@@ -109,13 +122,7 @@ def test_white_furnace_keeps_the_energy_of_the_fine_normals():
         material.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.9, 0.9, 0.9, 1.0)
         for loop in bpy.data.objects["Plane"].data.uv_layers.active.data:
             loop.uv = (loop.uv[0] * 50.0, loop.uv[1] * 50.0)
-        scene = bpy.context.scene
-        bpy.ops.object.camera_add(location=(0.0, 0.0, 3.0))
-        scene.camera = bpy.context.active_object
-        scene.camera.data.type = "ORTHO"
-        scene.camera.data.ortho_scale = 1.5
-        h.uniform_world(scene, "Furnace", (1.0, 1.0, 1.0))
-        h.configure_render(scene, 32, 32, cycles_samples=64, eevee_samples=16)
+        scene = straight_down_view("Furnace", (1.0, 1.0, 1.0), 32, cycles_samples=64, eevee_samples=16)
 
         def means(name):
             return {e: float(render(scene, e, os.path.join(directory, name + ".exr")).mean()) for e in engines}
@@ -199,12 +206,7 @@ def test_eevee_film_weighting_follows_the_view_exposure():
     tree.links.new(checker.outputs["Color"], emission.inputs["Color"])
     tree.links.new(emission.outputs["Emission"], output.inputs["Surface"])
     h.plane_with(material)
-    bpy.ops.object.camera_add(location=(0.0, 0.0, 3.0))
-    scene.camera = bpy.context.active_object
-    scene.camera.data.type = "ORTHO"
-    scene.camera.data.ortho_scale = 1.5
-    h.uniform_world(scene, "Black", (0.0, 0.0, 0.0))
-    h.configure_render(scene, 8, 8, cycles_samples=1, eevee_samples=16)
+    straight_down_view("Black", (0.0, 0.0, 0.0), 8, cycles_samples=1, eevee_samples=16)
     scene.render.engine = blender_compat.eevee_engine()
     darkens = blender_compat.eevee_film_darkens_with_exposure()
     means = {}
