@@ -20,7 +20,9 @@ below 0.1%), each one's integral there over the map's. Under an environment the 
 the differences mostly cancel; under a sun, a pixel sees one light direction.
 
 Texels: the demo's fbm (seed 7, roughness 0.15: "Silver Hammered") and bumps (seed 8, 0.2: "Steel
-Bumps"), 64², at level 3 (8×8 fine normals) and 6 (the whole map); and a 128² map of cosine bumps,
+Bumps"), 64², at level 3 (8×8 fine normals) and 6 (the whole map); one vMF lobe (κ = 100, normal
+to the surface, roughness 0.15) with fine normals drawn from it, so the lobe is exact and only the
+closure's shape differs; and a 128² map of cosine bumps,
 n ∝ (−0.6 cos 16πx, −0.6 cos 16πy, 1), roughness 0.2, at level 3 (half a period) and 7 (whole),
 whose normals pile up along the edges of a square 31° wide, fitted with the Bake panel's default 4
 lobes. Calls the library through ctypes (the add-on's native.py, plus the pyramid calls it does
@@ -203,6 +205,11 @@ def main():
             compare("%s-%d level %d (%d² fine normals)" % (pattern, seed, level, side),
                     normals[:side, :side].reshape(-1, 3).astype(float), texel_lobes(levels[level]),
                     roughness * roughness, ls, dw)
+    # One vMF lobe known exactly (no fit): the closure's shape against the vMF's alone.
+    mu, kappa = np.array([0.0, 0.0, 1.0]), 100.0
+    u, phi = strat2(64 * 64, np.random.default_rng(1))
+    compare("one vMF lobe, κ %.0f, roughness 0.15 (64² fine normals drawn from it)" % kappa,
+            sample_vmf(mu, kappa, u, phi), [(1.0, mu, kappa)], 0.15 ** 2, ls, dw)
     normals = cosine_bumps()
     levels = fitted_levels(native, library, normals, 0.2, ARTIST_LOBES)
     for level in (3, 7):
