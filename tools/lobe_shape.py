@@ -3,9 +3,9 @@ direction (docs/rendering.md, "The lobes' shape under a sun"):
 
     python3 tools/lobe_shape.py [--library build/native/libndfbake.so]
 
-A texel of a normal map is fitted by the library (ndfb_fit, 8 lobes, the add-on's defaults) and
-three things are evaluated for one view at every light direction of the upper hemisphere (2° × 3°
-grid), as the tools/grazing study models them (Multiscatter GGX, F = 1, Cycles' normal bending, no
+A texel of a normal map is fitted by the library (ndfb_fit with its defaults, at most 8 lobes; 4
+for the cosine bumps) and these are evaluated for one view at every light direction of the upper
+hemisphere (2° × 3° grid), as the tools/grazing study models them (Multiscatter GGX, F = 1, Cycles' normal bending, no
 masking between fine normals):
 - map: the texel's fine normals, each shading with its own GGX of the material's roughness;
 - vMF: the fitted lobes exactly, fine normals drawn from each vMF (what the fit stands for);
@@ -17,15 +17,16 @@ masking between fine normals):
 Printed per texel and view: each one's reflectance (∫ f cos dω) and, split by how strongly the map
 itself reflects a light (its core: above 10% of its peak; shoulder 1-10%; tail 0.1-1%; far tail
 below 0.1%), each one's integral there over the map's. Under an environment the parts add up and
-the differences mostly cancel; under a sun, a pixel sees one light direction.
+the differences mostly cancel; under a sun, a pixel sees one light direction. With Cycles' bending
+the map's core at low views is a spike of light from just above the horizon (the fine normals that
+face away from the view, all bent to reflect it there), which no closure draws.
 
 Texels: the demo's fbm (seed 7, roughness 0.15: "Silver Hammered") and bumps (seed 8, 0.2: "Steel
 Bumps"), 64², at level 3 (8×8 fine normals) and 6 (the whole map); one vMF lobe (κ = 100, normal
 to the surface, roughness 0.15) with fine normals drawn from it, so the lobe is exact and only the
-closure's shape differs; and a 128² map of cosine bumps,
-n ∝ (−0.6 cos 16πx, −0.6 cos 16πy, 1), roughness 0.2, at level 3 (half a period) and 7 (whole),
-whose normals pile up along the edges of a square 31° wide, fitted with the Bake panel's default 4
-lobes. Calls the library through ctypes (the add-on's native.py, plus the pyramid calls it does
+closure's shape differs; and a 128² map of cosine bumps, n ∝ (−0.6 cos 16πx, −0.6 cos 16πy, 1),
+roughness 0.2, at level 3 (half a period) and 7 (whole), whose normals pile up along the edges of
+a square 31° wide, fitted with the Bake panel's default 4 lobes. Calls the library through ctypes (the add-on's native.py, plus the pyramid calls it does
 not make) and tools/grazing (numpy). A few seconds; its pieces are checked by
 tests/tools/test_lobe_shape.py."""
 import argparse
@@ -106,7 +107,7 @@ def texel_lobes(level, y=0, x=0):
 
 def beckmann_eval(n, v, m, ls):
     """f·(n·l) of a single-scatter Beckmann BSDF (F = 1) about normals n[M,3], slope RMS m, at
-    lights ls[S,3] (Walter et al. 2007, eq. 25 and its rational Smith Λ, as Cycles evaluates it)."""
+    lights ls[S,3] (Walter et al. 2007, §5.1: D and the rational fit of G1, here as Λ = 1/G1 − 1)."""
     t, b = basis(n)
     vloc = np.stack([t @ v, b @ v, n @ v], -1)
     lloc = np.stack([(ls @ t.T).T, (ls @ b.T).T, (ls @ n.T).T], -1)
