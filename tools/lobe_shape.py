@@ -5,8 +5,8 @@ direction (docs/rendering.md, "The lobes' shape under a sun"):
 
 A texel of a normal map is fitted by the library (ndfb_fit with its defaults, at most 8 lobes; 4
 for the cosine bumps) and these are evaluated for one view at every light direction of the upper
-hemisphere (2° × 3° grid), as the tools/grazing study models them (Multiscatter GGX, F = 1, Cycles' normal bending, no
-masking between fine normals):
+hemisphere (2° × 3° grid), as the tools/grazing study models them (Multiscatter GGX, F = 1,
+Cycles' normal bending, no masking between fine normals):
 - map: the texel's fine normals, each shading with its own GGX of the material's roughness;
 - vMF: the fitted lobes exactly, fine normals drawn from each vMF (what the fit stands for);
 - GGX W: one GGX closure per lobe with α'² = α² + W/κ (W = 1.5 is the add-on's, brdf.h
