@@ -27,7 +27,7 @@ to the surface, roughness 0.15) with fine normals drawn from it, so the lobe is 
 closure's shape differs; and a 128² map of cosine bumps, n ∝ (−0.6 cos 16πx, −0.6 cos 16πy, 1),
 roughness 0.2, at level 3 (half a period) and 7 (whole), whose normals pile up along the edges of
 a square 31° wide, fitted with the Bake panel's default 4 lobes. Calls the library through ctypes (the add-on's native.py, plus the pyramid calls it does
-not make) and tools/grazing (numpy). A few seconds; its pieces are checked by
+not make) and tools/grazing (numpy). 15 s on a 2-core machine; its pieces are checked by
 tests/tools/test_lobe_shape.py."""
 import argparse
 import ctypes
