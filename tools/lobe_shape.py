@@ -26,12 +26,11 @@ Bumps"), 64², at level 3 (8×8 fine normals) and 6 (the whole map); one vMF lob
 to the surface, roughness 0.15) with fine normals drawn from it, so the lobe is exact and only the
 closure's shape differs; and a 128² map of cosine bumps, n ∝ (−0.6 cos 16πx, −0.6 cos 16πy, 1),
 roughness 0.2, at level 3 (half a period) and 7 (whole), whose normals pile up along the edges of
-a square 31° wide, fitted with the Bake panel's default 4 lobes. Calls the library through ctypes (the add-on's native.py, plus the pyramid calls it does
-not make) and tools/grazing (numpy). 15 s on a 2-core machine; its pieces are checked by
-tests/tools/test_lobe_shape.py."""
+a square 31° wide, fitted with the Bake panel's default 4 lobes. Calls the library through the
+add-on's ctypes module (native.py, plus the pyramid calls it does not make) and tools/grazing
+(numpy). 15 s on a 2-core machine; its pieces are checked by tests/tools/test_lobe_shape.py."""
 import argparse
 import ctypes
-import importlib.util
 import math
 import os
 import sys
@@ -40,13 +39,16 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
+sys.path.insert(0, os.path.join(HERE, "..", "addon", "ndfbake"))  # native.py needs no bpy
 
+import native  # noqa: E402
 from grazing.correction import corrected_alpha2  # noqa: E402
-from grazing.ggx import basis, bend, ggx_eval, sample_vmf, strat2  # noqa: E402
+from grazing.ggx import WIDENING, basis, bend, ggx_eval, sample_vmf, strat2  # noqa: E402
+from grazing.texels import kappa_of  # noqa: E402
 
 MAX_LOBES = 8                 # NDFB_MAX_LOBES: what the demo bakes
 ARTIST_LOBES = 4              # the Bake panel's default Maximum Lobes
-WIDENINGS = (1.5, 1.0, 0.75)  # the add-on's, then narrower
+WIDENINGS = (WIDENING, 1.0, 0.75)  # the add-on's, then narrower
 CYCLES_NARROWING = 4.0        # nodes.GRAZING_NARROWING["BSDF"]: what Cycles draws by default
 BUCKETS = ((0.1, np.inf, "core"), (0.01, 0.1, "shoulder"), (0.001, 0.01, "tail"), (0.0, 0.001, "far tail"))
 VIEWS = (30.0, 10.0)          # degrees above the surface
@@ -54,17 +56,7 @@ VIEWS = (30.0, 10.0)          # degrees above the surface
 
 # ---- the library ----------------------------------------------------------------------------
 
-def load_native():
-    """The add-on's ctypes module (addon/ndfbake/native.py, which needs no bpy), loaded by path:
-    the package's __init__ imports bpy."""
-    path = os.path.join(HERE, "..", "addon", "ndfbake", "native.py")
-    spec = importlib.util.spec_from_file_location("ndfbake_native", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def fitted_levels(native, library, normals, roughness, max_lobes):
+def fitted_levels(library, normals, roughness, max_lobes):
     """Every level's lobes of `normals` fitted with the library's defaults: [level] -> (H, W, slots,
     4) of ndfb_pyramid_read_lobe's RGBA. Declares the pyramid calls, which the add-on does not make."""
     lib, vp, u32, floats = library.lib, ctypes.c_void_p, ctypes.c_uint32, ctypes.POINTER(ctypes.c_float)
@@ -98,8 +90,7 @@ def texel_lobes(level, y=0, x=0):
         if weight <= 1e-6:
             continue
         r = np.array(moment, float) / weight
-        big_r = min(float(np.linalg.norm(r)), 1.0 - 1e-7)
-        lobes.append((float(weight), r / np.linalg.norm(r), (3 * big_r - big_r ** 3) / (1 - big_r * big_r)))
+        lobes.append((float(weight), r / np.linalg.norm(r), float(kappa_of(np.linalg.norm(r)))))
     return lobes
 
 
@@ -140,21 +131,28 @@ def vmf_response(lobes, v, alpha, ls, per_lobe=4096):
     return total
 
 
-def closure_response(lobes, v, alpha, ls, widening=None, narrowing=0.0):
-    """GGX closures widened by `widening` (and narrowed toward grazing views with C = `narrowing`,
-    as the group draws them), or with widening None Beckmann closures (m'² = α² + 2/κ)."""
+def _closures(lobes, v, ls, evaluate, alpha_of):
+    """Σ weight · evaluate(μ bent as Cycles bends it, v, alpha_of(μ, κ), ls) over the lobes."""
     total = 0.0
     for weight, mu, kappa in lobes:
-        mu_bent = bend(v[None], mu[None])
-        if widening is None:
-            response = beckmann_eval(mu_bent, v, math.sqrt(min(alpha ** 2 + 2 / kappa, 1)), ls)
-        elif narrowing:
-            alpha_c2 = corrected_alpha2(float(mu @ v), 1 / kappa, alpha, narrowing)
-            response = ggx_eval(mu_bent, v, math.sqrt(float(alpha_c2)), ls)
-        else:
-            response = ggx_eval(mu_bent, v, math.sqrt(min(alpha ** 2 + widening / kappa, 1)), ls)
-        total = total + weight * response[0]
+        total = total + weight * evaluate(bend(v[None], mu[None]), v, alpha_of(mu, kappa), ls)[0]
     return total
+
+
+def ggx_closures(lobes, v, alpha, ls, widening=WIDENING):
+    """One GGX closure per lobe, α'² = min(α² + widening/κ, 1): EEVEE Next's with the add-on's."""
+    return _closures(lobes, v, ls, ggx_eval, lambda mu, kappa: math.sqrt(min(alpha ** 2 + widening / kappa, 1)))
+
+
+def cycles_closures(lobes, v, alpha, ls):
+    """Cycles' lobes: the add-on's widening narrowed toward grazing views with CYCLES_NARROWING."""
+    return _closures(lobes, v, ls, ggx_eval, lambda mu, kappa: math.sqrt(float(
+        corrected_alpha2(float(mu @ v), 1 / kappa, alpha, CYCLES_NARROWING))))
+
+
+def beckmann_closures(lobes, v, alpha, ls):
+    """One Beckmann closure per lobe, m'² = min(α² + 2/κ, 1)."""
+    return _closures(lobes, v, ls, beckmann_eval, lambda mu, kappa: math.sqrt(min(alpha ** 2 + 2 / kappa, 1)))
 
 
 def light_grid():
@@ -165,9 +163,9 @@ def light_grid():
 
 def compare(name, normals, lobes, alpha, ls, dw):
     columns = {"vMF": lambda v: vmf_response(lobes, v, alpha, ls)}
-    columns |= {"GGX %.2f" % w: (lambda v, w=w: closure_response(lobes, v, alpha, ls, w)) for w in WIDENINGS}
-    columns["Cycles"] = lambda v: closure_response(lobes, v, alpha, ls, 1.5, CYCLES_NARROWING)
-    columns["Beckmann"] = lambda v: closure_response(lobes, v, alpha, ls)
+    columns |= {"GGX %.2f" % w: (lambda v, w=w: ggx_closures(lobes, v, alpha, ls, w)) for w in WIDENINGS}
+    columns["Cycles"] = lambda v: cycles_closures(lobes, v, alpha, ls)
+    columns["Beckmann"] = lambda v: beckmann_closures(lobes, v, alpha, ls)
     for up in VIEWS:
         v = np.array([0.0, -math.cos(math.radians(up)), math.sin(math.radians(up))])
         reference = map_response(normals, v, alpha, ls)
@@ -194,13 +192,12 @@ def main():
     parser = argparse.ArgumentParser(prog="tools/lobe_shape.py")
     parser.add_argument("--library", default=os.path.join(HERE, "..", "build", "native", "libndfbake.so"))
     args = parser.parse_args()
-    native = load_native()
     library = native.Library(os.path.abspath(args.library))
     ls, dw = light_grid()
     for pattern, seed, roughness in (("fbm", 7, 0.15), ("bumps", 8, 0.2)):
         with library.context() as context, context.synthesize(pattern, 64, 64, seed) as normal_map:
             normals = normal_map.read()
-        levels = fitted_levels(native, library, normals, roughness, MAX_LOBES)
+        levels = fitted_levels(library, normals, roughness, MAX_LOBES)
         for level in (3, 6):
             side = 1 << level
             compare("%s-%d level %d (%d² fine normals)" % (pattern, seed, level, side),
@@ -212,7 +209,7 @@ def main():
     compare("one vMF lobe, κ %.0f, roughness 0.15 (64² fine normals drawn from it)" % kappa,
             sample_vmf(mu, kappa, u, phi), [(1.0, mu, kappa)], 0.15 ** 2, ls, dw)
     normals = cosine_bumps()
-    levels = fitted_levels(native, library, normals, 0.2, ARTIST_LOBES)
+    levels = fitted_levels(library, normals, 0.2, ARTIST_LOBES)
     for level in (3, 7):
         side = 1 << level
         compare("cosine bumps level %d (%d² fine normals)" % (level, side),

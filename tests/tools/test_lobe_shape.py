@@ -31,8 +31,7 @@ def reflectance(values, dw):
 
 def main():
     library_path = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "build", "native", "libndfbake.so")
-    native = tool.load_native()
-    library = native.Library(os.path.abspath(library_path))
+    library = tool.native.Library(os.path.abspath(library_path))
     ls, dw = tool.light_grid()
     failures = []
 
@@ -43,13 +42,13 @@ def main():
 
     flat = np.zeros((8, 8, 3), np.float32)
     flat[..., 2] = 1.0
-    lobes = tool.texel_lobes(tool.fitted_levels(native, library, flat, 0.2, 4)[-1])
+    lobes = tool.texel_lobes(tool.fitted_levels(library, flat, 0.2, 4)[-1])
     expect(len(lobes) == 1 and lobes[0][2] > 1e5, "flat map: one lobe of κ > 1e5, got %s"
            % [(round(w, 3), round(k)) for w, _, k in lobes])
     reference = reflectance(tool.map_response(flat.reshape(-1, 3).astype(float), VIEW, ALPHA, ls), dw)
     columns = {"vMF": tool.vmf_response(lobes, VIEW, ALPHA, ls),
-               "GGX 1.5": tool.closure_response(lobes, VIEW, ALPHA, ls, 1.5),
-               "Cycles": tool.closure_response(lobes, VIEW, ALPHA, ls, 1.5, tool.CYCLES_NARROWING)}
+               "GGX 1.5": tool.ggx_closures(lobes, VIEW, ALPHA, ls),
+               "Cycles": tool.cycles_closures(lobes, VIEW, ALPHA, ls)}
     for name, values in columns.items():
         got = reflectance(values, dw)
         expect(abs(got / reference - 1) < 1e-3, "flat map, %s: reflectance %.5f against the map's %.5f"
@@ -59,7 +58,7 @@ def main():
     kappa = 50.0
     u, phi = strat2(64 * 64, np.random.default_rng(3))
     drawn = sample_vmf(mu, kappa, u, phi).reshape(64, 64, 3)
-    lobes = tool.texel_lobes(tool.fitted_levels(native, library, drawn, 0.2, 1)[-1])
+    lobes = tool.texel_lobes(tool.fitted_levels(library, drawn, 0.2, 1)[-1])
     _, fitted_mu, fitted_kappa = lobes[0]
     angle = math.degrees(math.acos(min(1.0, float(fitted_mu @ mu))))
     expect(len(lobes) == 1 and angle < 1.0 and abs(fitted_kappa / kappa - 1) < 0.1,
