@@ -109,10 +109,11 @@ def mask_border(mask, margin=1):
     return (x0 / width, x1 / width, y0 / height, y1 / height)
 
 
-def converge_reference_band(scene, directory, images, masks, regions=("ground_far", "spheres_far"),
+def converge_reference_band(scene, directory, images, info, masks, regions=("ground_far", "spheres_far"),
                             samples=REFERENCE_BAND_SAMPLES, log=print):
     """Renders the band of the image that holds `regions` (mask_border) again in Cycles at `samples`
-    and puts it into images["cycles_reference"] there; returns the number of seconds it took."""
+    and puts it into images["cycles_reference"] there; records the samples and the seconds in
+    render_plain's `info` (format_errors' titles name them). Returns the band (render's border)."""
     band = mask_border(np.logical_or.reduce([masks[r] for r in regions]))
     start = time.perf_counter()
     pixels = render(scene, "CYCLES", os.path.join(directory, "cycles_reference_band.exr"), samples, seed=1,
@@ -121,9 +122,11 @@ def converge_reference_band(scene, directory, images, masks, regions=("ground_fa
     inside = np.zeros((height, width, 1), dtype=bool)
     inside[round(band[2] * height):round(band[3] * height), round(band[0] * width):round(band[1] * width)] = True
     images["cycles_reference"] = np.where(inside, pixels, images["cycles_reference"])
-    seconds = time.perf_counter() - start
-    log("  rendered the reference's far band at %d spp in %.1f s" % (samples, seconds))
-    return seconds
+    info["seconds"]["cycles_reference_band"] = round(time.perf_counter() - start, 2)
+    info["cycles_reference_band_samples"] = samples
+    log("  rendered the reference's far band at %d spp in %.1f s"
+        % (samples, info["seconds"]["cycles_reference_band"]))
+    return band
 
 
 def normal_map_textures(material):

@@ -96,9 +96,7 @@ def run_demo(out, width=320, height=180, reference_samples=256, samples=16, eeve
 
     images, info = demo_render.render_plain(scene, renders, scene_info["materials"], reference_samples, samples,
                                             eevee_samples, eevee_reference_samples, log)
-    info["seconds"]["cycles_reference_band"] = round(
-        demo_render.converge_reference_band(scene, renders, images, masks, log=log), 2)
-    info["cycles_reference_band_samples"] = demo_render.REFERENCE_BAND_SAMPLES
+    demo_render.converge_reference_band(scene, renders, images, info, masks, log=log)
     start = time.perf_counter()
     bakes = bake_all(scene, cycles_lobes=cycles_lobes)
     bake_seconds = time.perf_counter() - start

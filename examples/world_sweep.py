@@ -11,7 +11,7 @@ once (demo_render.render_plain), bakes every material with the defaults an artis
 8 lobes) and renders ndfbake; Cycles' far ground is also rendered at --converged-samples for its
 converged brightness (its 16-spp image error counts noise too). The Cycles reference is rendered
 at 256 spp and its far regions' band again at --reference-band-samples, which replaces it there
-(demo_render.converge_reference_band says why). Writes DIR/<world>/ (renders,
+(demo_render.REFERENCE_BAND_SAMPLES says why). Writes DIR/<world>/ (renders,
 report.json) and DIR/world_sweep.json, and prints the table docs/rendering.md ("Grazing views")
 shows: per world and engine, the far ground's mean luminance over the reference's, and the ratios
 ndfbake / naive of the block error (EEVEE) and of the 16-spp pixel RMSE (Cycles) on the far ground
@@ -57,7 +57,7 @@ def sweep_world(out, world, width, height, samples, eevee_samples, converged_sam
     images, info = demo_render.render_plain(scene, renders, scene_info["materials"], samples=samples,
                                             eevee_samples=eevee_samples, log=log)
     if band_samples:
-        demo_render.converge_reference_band(scene, renders, images, masks, REGIONS, band_samples, log)
+        demo_render.converge_reference_band(scene, renders, images, info, masks, REGIONS, band_samples, log)
     results = {}
     for name, narrowing in variants.items():
         results[name] = _measure_variant(scene, renders, masks, dict(images), narrowing, samples, eevee_samples,

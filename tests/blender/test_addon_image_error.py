@@ -80,14 +80,15 @@ FIGURE_ENGINE = {figure: engine for figure, engine, _ in demo_render.FIGURES}
 EEVEE_NEXT_REGRESSION_BOUNDS = {"spheres_far": 0.8, "all": 0.6}
 # The regions shown for information are held to regression bounds with a margin over what they
 # measured (EEVEE 0.660 on the whole image in 3.4; Cycles 0.311 on the whole image, 0.243 on the near
-# ground, 0.250 and 0.206 since the far band is converged). EEVEE's near ground has none: ndfbake renders it brighter than the reference there
-# (1.06 of naive's block error; docs/rendering.md, "Image error").
+# ground, 0.250 and 0.206 since the far band is converged). EEVEE's near ground has none: ndfbake
+# renders it brighter than the reference there (1.06 of naive's block error; docs/rendering.md,
+# "Image error").
 REGRESSION_BOUNDS = {("eevee", "all"): 0.7, ("cycles", "all"): 0.5, ("cycles", "ground_near"): 0.5}
 MIN_WINDOWS = 40                          # 4x4 windows a region needs for its figure to mean anything
 CONVERGED_SAMPLES = 128                   # Cycles Lobes compared where noise no longer decides
-# The far regions' band of the Cycles reference: far ground 0.7553-0.7571 at 4096 spp in Blender 5.0
-# and 5.3 (seeds 1 and 2) against 0.7442-0.7977 at 512.
-CONVERGED_REFERENCE_SAMPLES = 4096
+# The far regions' band of the Cycles reference is rendered at demo_render.REFERENCE_BAND_SAMPLES
+# (4096): far ground 0.7553-0.7571 in Blender 5.0 and 5.3 (seeds 1 and 2) against 0.7442-0.7977 at
+# 512.
 # Issue 24's goal is the far ground's converged brightness within 10% of the reference's under 6 of
 # Blender's 8 studio worlds (examples/world_sweep.py; docs/rendering.md, "Grazing views"); under
 # this world it measured 0.919 against the 4096-spp reference (Blender 5.0 and 5.3, 2026-11-29;
@@ -117,14 +118,12 @@ def test_image_error_against_references():
                  "eevee_reference.exr differs from the reference it was written from (largest difference %g)"
                  % float(np.abs(saved - images["eevee_reference"]).max()))
 
-        # The far regions' band of the Cycles reference again at CONVERGED_REFERENCE_SAMPLES (at 512 the
-        # far ground is still ±4% from seed to seed, and that noise would count in both errors and
-        # hold every ratio towards 1): what the figures on REGIONS and the Cycles Lobes comparison
-        # below stand on.
-        band = demo_render.mask_border(np.logical_or.reduce([masks[r] for r in REGIONS]))
-        demo_render.converge_reference_band(scene, renders, images, masks, REGIONS, CONVERGED_REFERENCE_SAMPLES,
-                                            log=lambda s: print(s, flush=True))
-        info["cycles_reference_band_samples"] = CONVERGED_REFERENCE_SAMPLES   # for format_errors' titles
+        # The far regions' band of the Cycles reference again at demo_render.REFERENCE_BAND_SAMPLES
+        # (at 512 the far ground is still ±4% from seed to seed, and that noise would count in both
+        # errors and hold every ratio towards 1): what the figures on REGIONS and the Cycles Lobes
+        # comparison below stand on.
+        band = demo_render.converge_reference_band(scene, renders, images, info, masks, REGIONS,
+                                                   log=lambda s: print(s, flush=True))
         reference = images["cycles_reference"]
 
         bakes = demo_scene.bake_all(scene, max_lobes=MAX_LOBES)
