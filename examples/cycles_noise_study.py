@@ -20,7 +20,11 @@ Variants, each a bake of every material: widened and narrowed (the bake's Cycles
 the widened lobes, or the ones narrowed at grazing views), either with -ggx (the lobes'
 Multiscatter GGX set to GGX); and flat, no bake: the materials with their normal maps switched off
 (Normal Map Strength 0), whose noise column is what a surface as glossy as the material costs
-in noise without normals finer than a pixel.
+in noise without normals finer than a pixel; and flat-rR (R a roughness, e.g. flat-r0.4): the same
+with every Principled BSDF's roughness set to R, the noise a lobe that wide costs. Every row also
+prints its noise at the reference's brightness (noise × reference mean / mean: a material scaled to
+look as bright as the reference is that much noisier or less noisy, exactly, since scaling a BSDF
+scales every sample), the figure to hold against half of naive's rmse16.
 """
 import argparse
 import contextlib
@@ -43,6 +47,18 @@ SEEDS = (0, 2, 3)
 # The variants (module docstring); all but widened-ggx and flat run by default.
 VARIANTS = ("widened", "narrowed", "widened-ggx", "narrowed-ggx", "flat")
 DEFAULT_VARIANTS = tuple(v for v in VARIANTS if v not in ("widened-ggx", "flat"))
+FLAT_ROUGHNESS_PREFIX = "flat-r"   # flat-r0.4: the flat variant at roughness 0.4
+
+
+def flat_roughness(variant):
+    """The roughness a flat-rR variant names, None for any other variant; ValueError if R is not a
+    roughness in [0, 1]."""
+    if not variant.startswith(FLAT_ROUGHNESS_PREFIX):
+        return None
+    roughness = float(variant[len(FLAT_ROUGHNESS_PREFIX):])
+    if not 0.0 <= roughness <= 1.0:
+        raise ValueError("roughness %g is outside [0, 1]" % roughness)
+    return roughness
 REGIONS = ("ground_far", "spheres_far")
 # A sun is the few pixels above SUN_THRESHOLD of the brightest (then the looser fallback); more
 # than SUN_MAX_PIXELS there is no compact sun (an overcast sky, a window-lit studio) to split off.
@@ -119,20 +135,23 @@ def use_variant(scene, variant, max_lobes):
 
 
 @contextlib.contextmanager
-def flattened(material_names):
-    """The materials with their Normal Map nodes at Strength 0 (the surface's own normal), restored
-    after: the 16-spp noise that the material's own gloss costs without normals finer than a pixel
-    (lobes drawn wider than that gloss may be less noisy; lobes narrowed back to it at grazing
-    views are not)."""
-    strengths = [(node.inputs["Strength"], node.inputs["Strength"].default_value)
-                 for name in material_names for node in bpy.data.materials[name].node_tree.nodes
-                 if node.bl_idname == "ShaderNodeNormalMap"]
-    for socket, _ in strengths:
-        socket.default_value = 0.0
+def flattened(material_names, roughness=None):
+    """The materials with their Normal Map nodes at Strength 0 (the surface's own normal), and with
+    `roughness` every Principled BSDF's roughness set to it, restored after: the 16-spp noise that
+    the material's own gloss (or a lobe `roughness` wide) costs without normals finer than a pixel."""
+    trees = [bpy.data.materials[name].node_tree for name in material_names]
+    changed = [(node.inputs["Strength"], 0.0) for tree in trees for node in tree.nodes
+               if node.bl_idname == "ShaderNodeNormalMap"]
+    if roughness is not None:
+        changed += [(node.inputs["Roughness"], roughness) for tree in trees for node in tree.nodes
+                    if node.bl_idname == "ShaderNodeBsdfPrincipled"]
+    saved = [(socket, socket.default_value) for socket, _ in changed]
+    for socket, value in changed:
+        socket.default_value = value
     try:
         yield
     finally:
-        for socket, value in strengths:
+        for socket, value in saved:
             socket.default_value = value
 
 
@@ -164,17 +183,20 @@ def study(out, world, sun_lamp, reference_samples, converged_samples, variants, 
                    "block_converged": errors["converged"]["block"],
                    "mean": errors["converged"]["mean"],
                    "reference_mean": errors["reference"]["mean"]}
+            row["noise_at_reference_brightness"] = row["noise"] * row["reference_mean"] / max(row["mean"], 1e-12)
             rows.append(row)
-            print("%-14s %-12s rmse16 %.4f noise %.4f bias %.4f block %.4f (converged %.4f) mean %.4f "
-                  "(reference %.4f)" % (name, region, row["rmse16"], row["noise"], row["bias"], row["block"],
-                                        row["block_converged"], row["mean"], row["reference_mean"]), flush=True)
+            print("%-14s %-12s rmse16 %.4f noise %.4f (at the reference's brightness %.4f) bias %.4f block %.4f "
+                  "(converged %.4f) mean %.4f (reference %.4f)"
+                  % (name, region, row["rmse16"], row["noise"], row["noise_at_reference_brightness"], row["bias"],
+                     row["block"], row["block_converged"], row["mean"], row["reference_mean"]), flush=True)
 
     measure("naive")
-    if "flat" in variants:
-        with flattened(info["materials"]):
-            measure("flat")
     for variant in variants:
-        if variant != "flat":
+        if variant == "flat" or flat_roughness(variant) is not None:
+            with flattened(info["materials"], flat_roughness(variant)):
+                measure(variant)
+    for variant in variants:
+        if variant != "flat" and flat_roughness(variant) is None:
             use_variant(scene, variant, max_lobes)
             measure(variant)
     for row in rows:
@@ -201,7 +223,10 @@ def main():
     parser.add_argument("--library")
     args = demo_build.script_arguments(parser)
     variants = [v for v in args.variants.split(",") if v]
-    unknown = [v for v in variants if v not in VARIANTS]
+    try:
+        unknown = [v for v in variants if v not in VARIANTS and flat_roughness(v) is None]
+    except ValueError as error:
+        parser.error("variant flat-rR: %s" % error)
     if unknown:
         parser.error("unknown variants: %s" % ", ".join(unknown))
     os.makedirs(args.out, exist_ok=True)
