@@ -48,6 +48,11 @@ SEEDS = (0, 2, 3)
 VARIANTS = ("widened", "narrowed", "widened-ggx", "narrowed-ggx", "flat")
 DEFAULT_VARIANTS = tuple(v for v in VARIANTS if v not in ("widened-ggx", "flat"))
 FLAT_ROUGHNESS_PREFIX = "flat-r"   # flat-r0.4: the flat variant at roughness 0.4
+REGIONS = ("ground_far", "spheres_far")
+# A sun is the few pixels above SUN_THRESHOLD of the brightest (then the looser fallback); more
+# than SUN_MAX_PIXELS there is no compact sun (an overcast sky, a window-lit studio) to split off.
+SUN_THRESHOLDS = (0.02, 0.1)
+SUN_MAX_PIXELS = 64
 
 
 def flat_roughness(variant):
@@ -59,11 +64,6 @@ def flat_roughness(variant):
     if not 0.0 <= roughness <= 1.0:
         raise ValueError("roughness %g is outside [0, 1]" % roughness)
     return roughness
-REGIONS = ("ground_far", "spheres_far")
-# A sun is the few pixels above SUN_THRESHOLD of the brightest (then the looser fallback); more
-# than SUN_MAX_PIXELS there is no compact sun (an overcast sky, a window-lit studio) to split off.
-SUN_THRESHOLDS = (0.02, 0.1)
-SUN_MAX_PIXELS = 64
 
 
 def split_sun(scene):
@@ -191,7 +191,7 @@ def study(out, world, sun_lamp, reference_samples, converged_samples, variants, 
                      row["block"], row["block_converged"], row["mean"], row["reference_mean"]), flush=True)
 
     measure("naive")
-    for variant in variants:
+    for variant in variants:  # the flat ones first: a bake replaces the materials' nodes
         if variant == "flat" or flat_roughness(variant) is not None:
             with flattened(info["materials"], flat_roughness(variant)):
                 measure(variant)
