@@ -29,6 +29,7 @@ checks (a gate in BakeJob.run), so the test does not race the fit on a loaded ma
 The process exits 0 when every check holds, 1 otherwise (printed).
 """
 import atexit
+import faulthandler
 import hashlib
 import os
 import sys
@@ -38,6 +39,10 @@ import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import test_addon_helpers as h  # noqa: E402
+
+# A segfault seen twice in Debian's Blender 3.4 here, with no Python stack in Blender's crash file
+# (docs/hardening.md): should it come again, every thread's Python stack goes to stderr.
+faulthandler.enable(all_threads=True)
 
 state = {"step": "start", "ticks": 0, "deadline": time.time() + 150, "hold": {"Window"}}
 
