@@ -1,14 +1,12 @@
 #include "bake/memory_budget.h"
 
-#include <sys/resource.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cstdio>
 
 #include "bake/lobe_atlas.h"
 #include "error.h"
 #include "ndf/weighted_normal.h"
+#include "platform/memory.h"
 #include "pyramid/normal_bins.h"
 #include "pyramid/parallel.h"
 
@@ -104,9 +102,8 @@ MemoryEstimate estimate_bake_memory(int width, int height, const SourceLayout& s
 uint64_t effective_memory_limit(uint64_t requested)
 {
     if (requested > 0) return requested;
-    const long pages = ::sysconf(_SC_PHYS_PAGES), page_size = ::sysconf(_SC_PAGESIZE);
-    if (pages <= 0 || page_size <= 0) return UINT64_MAX;
-    return uint64_t(pages) * uint64_t(page_size);
+    const uint64_t physical = physical_memory_bytes();
+    return physical > 0 ? physical : UINT64_MAX;
 }
 
 void check_memory_budget(const MemoryEstimate& estimate, uint64_t requested_limit, int width, int height,
@@ -124,11 +121,6 @@ void check_memory_budget(const MemoryEstimate& estimate, uint64_t requested_limi
                     "ndfbake bake --max-memory)");
 }
 
-uint64_t process_peak_memory()
-{
-    struct rusage usage {};
-    if (::getrusage(RUSAGE_SELF, &usage) != 0) return 0;
-    return uint64_t(usage.ru_maxrss) * 1024;  // Linux reports KiB
-}
+uint64_t process_peak_memory() { return peak_resident_bytes(); }
 
 }  // namespace ndfbake

@@ -39,7 +39,7 @@ uint64_t effective_memory_limit(uint64_t requested);
 void check_memory_budget(const MemoryEstimate& estimate, uint64_t requested_limit, int width, int height,
                          int slots, const std::string& what);
 
-// The process's peak resident set so far (getrusage ru_maxrss), in bytes.
+// The process's peak resident set so far, in bytes (platform/memory.h: peak_resident_bytes).
 uint64_t process_peak_memory();
 
 }  // namespace ndfbake

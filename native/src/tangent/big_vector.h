@@ -1,11 +1,10 @@
 // Vectors for the module's large per-corner arrays. A 1M-triangle mesh needs ~200 MB of scratch
 // arrays; faulting that in 4 KiB pages costs the kernel about as much time as the whole tangent
-// computation, so large blocks are 2 MiB aligned and marked for transparent huge pages. Elements
+// computation, so large blocks come straight from the system in whole 2 MiB units and, where the
+// system has them, are marked for transparent huge pages (platform/memory.h). Elements
 // are default-initialized (not zeroed) on resize: every array here is written before it is read,
 // and zeroing it first would be a second pass over memory.
 #pragma once
-
-#include <sys/mman.h>
 
 #include <cstddef>
 #include <cstdlib>
@@ -13,6 +12,8 @@
 #include <new>
 #include <utility>
 #include <vector>
+
+#include "platform/memory.h"
 
 namespace ndfbake {
 
@@ -31,16 +32,15 @@ struct BigAllocator {
         const size_t bytes = n * sizeof(T);
         if (bytes < kHuge) return std::allocator<T>().allocate(n);
         const size_t rounded = (bytes + kHuge - 1) & ~(kHuge - 1);
-        void* p = mmap(nullptr, rounded, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-        if (p == MAP_FAILED) throw std::bad_alloc();
-        madvise(p, rounded, MADV_HUGEPAGE);  // advice only: without THP it is a no-op
+        void* p = allocate_pages(rounded);
+        if (!p) throw std::bad_alloc();
         return static_cast<T*>(p);
     }
     void deallocate(T* p, size_t n) noexcept
     {
         const size_t bytes = n * sizeof(T);
         if (bytes < kHuge) std::allocator<T>().deallocate(p, n);
-        else munmap(p, (bytes + kHuge - 1) & ~(kHuge - 1));
+        else release_pages(p, (bytes + kHuge - 1) & ~(kHuge - 1));
     }
     template <typename U>
     void construct(U* p) noexcept
