@@ -24,7 +24,20 @@
 #include <stddef.h>
 #include <stdint.h>
 
+/* NDFB_API marks the functions the library exports; it is built with every other symbol hidden.
+ * The library's own sources define NDFBAKE_BUILDING. On Windows a DLL exports what is marked
+ * __declspec(dllexport); a program linking its import library gets __declspec(dllimport), and one
+ * that compiles the library's sources into itself defines NDFBAKE_STATIC. Loading the library at
+ * run time (ctypes, dlopen, LoadLibrary) needs none of this. */
+#if defined(_WIN32) || defined(__CYGWIN__)
 #if defined(NDFBAKE_BUILDING)
+#define NDFB_API __declspec(dllexport)
+#elif defined(NDFBAKE_STATIC)
+#define NDFB_API
+#else
+#define NDFB_API __declspec(dllimport)
+#endif
+#elif defined(NDFBAKE_BUILDING)
 #define NDFB_API __attribute__((visibility("default")))
 #else
 #define NDFB_API
