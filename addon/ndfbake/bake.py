@@ -218,8 +218,11 @@ def _lobe_textures(out_dir, atlas):
 
 
 def _relative(path):
+    """`path` relative to the .blend ('//…'), with '/' between folders whatever the system: Blender
+    reads both separators on Windows but only '/' on other systems' Python side
+    (material_scan.image_file_path), so a .blend baked on Windows opens anywhere."""
     try:
-        return bpy.path.relpath(path)
+        return bpy.path.relpath(path).replace("\\", "/")
     except ValueError:  # another drive
         return path
 

@@ -3,12 +3,13 @@
 Naming. A bake writes a new folder beside the .blend named after the material,
 `//<material>.ndfbake/`. A name with characters outside [A-Za-z0-9_.-] has them replaced by '_'
 and gets '~' and a hash of the exact name appended (`//Metal_01~1a2b3c4d.ndfbake/` for
-"Metal 01"), so no two names share a folder. A bake's folder is never written again: a re-bake
-goes to `~2`, `~3`… while earlier ones exist, so Ctrl-Z after a re-bake or a Revert finds the
-previous bake's files where its nodes expect them. A folder is new when nothing on disk has its
-name (compared without case: the .blend may move to a case-insensitive disk), no material's bake
-names it and no bake in progress has reserved it; this also keeps apart two .blend files side by
-side with a material of the same name.
+"Metal 01"), so no two names share a folder; so does a name Windows keeps for a device, with a
+'_' after it (`//CON_~….ndfbake/` for "CON", `//nul_.001~….ndfbake/` for "nul.001"). A bake's
+folder is never written again: a re-bake goes to `~2`, `~3`… while earlier ones exist, so Ctrl-Z
+after a re-bake or a Revert finds the previous bake's files where its nodes expect them. A folder
+is new when nothing on disk has its name (compared without case: the .blend may move to a
+case-insensitive disk), no material's bake names it and no bake in progress has reserved it; this
+also keeps apart two .blend files side by side with a material of the same name.
 
 Deleting. A lobe folder may be needed by any .blend that was ever saved while using it: this one
 (and its .blend1 backups) before a re-bake or a Revert, the file before a Save As, a Save Copy, a
@@ -50,8 +51,17 @@ class FolderError(Exception):
     """No folder name is free (see new_folder)."""
 
 
+# The names Windows keeps for devices, whatever their case and extension ("CON", "nul.001",
+# "Com1.x"): no folder can be named so there (a bake into "NUL.ndfbake" would even write nowhere),
+# and a .blend may move to Windows with its folders.
+_WINDOWS_DEVICE = re.compile(r"(CON|PRN|AUX|NUL|COM[0-9]|LPT[0-9])(?=\.|$)", re.IGNORECASE)
+
+
 def safe_name(name):
-    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip(".") or "material"
+    """`name` as a folder name on any system: characters outside [A-Za-z0-9_.-] become '_', no dot
+    at either end (Windows drops trailing dots), '_' after a Windows device name ("CON_.001")."""
+    safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip(".") or "material"
+    return _WINDOWS_DEVICE.sub(r"\1_", safe, count=1) if _WINDOWS_DEVICE.match(safe) else safe
 
 
 def folder_name(name, version=1):

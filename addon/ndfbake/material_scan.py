@@ -239,8 +239,13 @@ def record(material):
 
 
 def image_file_path(image):
-    """Absolute path of an image's file, as Blender resolves it (library-relative paths too)."""
-    return os.path.normpath(bpy.path.abspath(image.filepath, library=image.library))
+    """Absolute path of an image's file, as Blender resolves it (library-relative paths too). A
+    '//' path saved on Windows may separate its folders with '\\', which Blender reads as '/' on
+    every system (BLI_path_abs): so does this, where '\\' is no separator."""
+    path = image.filepath
+    if path.startswith("//") and os.sep == "/":
+        path = path.replace("\\", "/")
+    return os.path.normpath(bpy.path.abspath(path, library=image.library))
 
 
 def check_image(image, node_name):

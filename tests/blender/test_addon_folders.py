@@ -21,8 +21,13 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
   library a baked material was appended from; Ctrl-Z after a save finds the files.
 - ndfbake.delete_unused_folders deletes the bake files of the folders beside the .blend that the
   file does not use (a saved, replaced bake's), nothing else.
+- Materials named as Windows devices ("CON", "nul.001") get folders Windows can make.
+- Lobe images' paths are written with '/' on every system; paths saved with '\\' (a .blend from
+  Windows) still name their folder and the normal map's file on every system.
 """
 import os
+import re
+import shutil
 import sys
 
 import bpy
@@ -35,6 +40,10 @@ def _lobe_files(folder):
     return sorted(n for n in os.listdir(folder) if n.endswith(".exr")) if os.path.isdir(folder) else []
 
 
+def _level0_lobes(folder):
+    return sum(1 for n in _lobe_files(folder) if n.startswith("level00_lobe"))
+
+
 def _images_load(material):
     from ndfbake import material_scan
     names = material_scan.record(material)["images"]
@@ -43,6 +52,64 @@ def _images_load(material):
         image.reload()
         h.expect(image.size[0] > 0, "image %s of %s does not load (%s)" % (name, material.name, image.filepath))
     return names
+
+
+# The names Windows keeps for devices, whatever the extension: it makes no folder "CON.ndfbake",
+# and "NUL.ndfbake" is the null device (what a bake writes there is gone).
+WINDOWS_DEVICE = re.compile(r"(CON|PRN|AUX|NUL|COM[0-9]|LPT[0-9])$", re.IGNORECASE)
+
+
+def test_windows_device_names_get_folders_windows_can_make():
+    from ndfbake import bake, lobe_folders
+    names = ("CON", "nul", "Aux.001", "com1", "LPT9.x", "prn.", "CONSOLE")
+    folders = [lobe_folders.folder_name(name) for name in names]
+    print("  folders: %s" % folders)
+    for name, folder in zip(names, folders):
+        h.expect(not WINDOWS_DEVICE.match(folder.split(".")[0]), "%r: %s is a Windows device" % (name, folder))
+    h.expect(len({f.casefold() for f in folders}) == len(folders), "shared folders: %s" % folders)
+    h.expect(folders[-1] == "CONSOLE.ndfbake", "a name that is no device keeps its plain folder: %s" % folders[-1])
+    with h.scratch_dir() as directory:
+        first = h.baked_scene(directory, material_name="CON")
+        second = h.normal_mapped_material("nul.001", os.path.join(directory, "normal.png"))
+        h.plane_with(second, "Plane 2")
+        bpy.ops.wm.save_mainfile()
+        for material in (first, second):
+            result = bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+            folder = os.path.normpath(bpy.path.abspath(result.folder))
+            h.expect(os.path.basename(folder) in os.listdir(directory) and _level0_lobes(folder) == 2,
+                     "%s: no lobe files in %s (%s)" % (material.name, folder, os.listdir(directory)))
+            _images_load(material)
+
+
+def test_backslashes_in_saved_paths_still_name_the_files():
+    """A .blend saved on Windows may hold '//Bumpy.ndfbake\\level00_lobe0.exr' and
+    '//maps\\normal.png', which Blender reads on every system: the add-on must too, or the normal
+    map is missing and closing the file deletes the lobe folder it uses. A bake writes '/'."""
+    from ndfbake import bake, lobe_folders, material_scan
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory)
+        os.makedirs(os.path.join(directory, "maps"))
+        shutil.move(os.path.join(directory, "normal.png"), os.path.join(directory, "maps", "normal.png"))
+        material.node_tree.nodes["Normal Texture"].image.filepath = "//maps\\normal.png"
+        bpy.ops.wm.save_mainfile()
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=2))
+        rec = material_scan.record(material)
+        paths = [bpy.data.images[name].filepath for name in rec["images"]]
+        h.expect(all(p.startswith(result.folder + "/") and "\\" not in p for p in paths), "lobe paths: %s" % paths)
+        for name in rec["images"]:
+            image = bpy.data.images[name]
+            image.filepath = "//" + image.filepath[2:].replace("/", "\\")
+        folder = os.path.join(directory, result.folder[2:])
+        h.expect(os.path.normcase(lobe_folders.record_folder(rec)) == os.path.normcase(folder),
+                 "the bake's folder: %s" % lobe_folders.record_folder(rec))
+        bpy.ops.wm.save_mainfile()
+        h.close_file()
+        h.expect(_level0_lobes(folder) == 2, "closing the saved file deleted the folder it uses: %s"
+                 % h.listing(directory))
+        h.expect(lobe_folders.unused_folders() == [], "offered for deletion: %s" % lobe_folders.unused_folders())
+        _images_load(material)
+        result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))  # the normal map is found
+        h.expect(result.folder == "//Bumpy~2.ndfbake", "the re-bake went to %s" % result.folder)
 
 
 def test_names_that_clash_on_disk_get_folders_of_their_own():
@@ -338,6 +405,8 @@ def test_delete_unused_folders_deletes_only_what_this_file_does_not_use():
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_names_that_clash_on_disk_get_folders_of_their_own,
+           test_windows_device_names_get_folders_windows_can_make,
+           test_backslashes_in_saved_paths_still_name_the_files,
            test_a_copy_shares_the_folder_until_it_is_baked_itself,
            test_a_rebake_that_fails_keeps_the_previous_bake,
            test_revert_and_rebake_keep_a_mix_shader_added_after_the_bake,
