@@ -17,6 +17,8 @@
  *   a struct had when ABI 1 first shipped (all but those below an "added later" line) are always
  *   read: a struct_size that does not cover them is NDFB_ERROR_INVALID_ARGUMENT.
  * - A context may be used by one thread at a time; separate contexts are independent.
+ * - Paths (files and folders) are UTF-8 strings on every platform, Windows included; messages name
+ *   them in UTF-8.
  */
 #ifndef NDFBAKE_H
 #define NDFBAKE_H
@@ -255,9 +257,12 @@ NDFB_API ndfb_status ndfb_texel_error(ndfb_context ctx, ndfb_normal_map map, ndf
 
 /* ---- files --------------------------------------------------------------------------------- */
 /* Writes level{L}_lobe{j}.exr for every level and lobe slot, optional level{L}_color{j}.exr,
- * atlas_lobe{j}.exr and mip_lobe{j}.exr (write options atlas, mipmap), and report.json into out_dir, each atomically (temp name, then rename). On failure or cancel, no
- * file of this call remains. The files and the report record the options the pyramid was fitted
- * with; of fit_options only the progress callback and threads are used. */
+ * atlas_lobe{j}.exr and mip_lobe{j}.exr (write options atlas, mipmap), and report.json into
+ * out_dir, each atomically (temp name, then rename). On failure or cancel, no file of this call
+ * remains, and an earlier bake's files in out_dir are all kept: they are replaced together or not
+ * at all (on Windows a file open in another program cannot be replaced: the call then fails with
+ * NDFB_ERROR_IO naming the file). The files and the report record the options the pyramid was
+ * fitted with; of fit_options only the progress callback and threads are used. */
 NDFB_API ndfb_status ndfb_pyramid_write(ndfb_context ctx, ndfb_pyramid pyramid, ndfb_normal_map map,
                                         const char* out_dir, const ndfb_fit_options* fit_options,
                                         const ndfb_write_options* options);

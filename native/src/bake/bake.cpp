@@ -4,8 +4,6 @@
 // bake/memory_budget, bake/level_stats, io/, export/lobe_shader and pyramid/.
 #include "bake/bake.h"
 
-#include <unistd.h>
-
 #include <atomic>
 #include <chrono>
 #include <filesystem>
@@ -21,6 +19,7 @@
 #include "io/atomic_file.h"
 #include "io/color_decode.h"
 #include "io/image_files.h"
+#include "platform/files.h"
 #include "pyramid/parallel.h"
 
 namespace ndfbake {
@@ -45,16 +44,19 @@ bool is_bake_file(const std::string& name)
     return name == kLobeShaderFileName || std::regex_match(name, pattern);
 }
 
-fs::path make_staging_dir(const fs::path& out_dir)
+fs::path make_staging_dir(const std::string& out_dir)
 {
     static std::atomic<unsigned> counter{0};
-    const fs::path staging = out_dir / (".ndfbake-staging-" + std::to_string(::getpid()) + "-" +
-                                        std::to_string(counter.fetch_add(1)));
+    const fs::path staging = path_from_utf8(out_dir) / (".ndfbake-staging-" + std::to_string(current_process_id()) +
+                                                        "-" + std::to_string(counter.fetch_add(1)));
     std::error_code ec;
     fs::create_directory(staging, ec);
-    if (ec) throw Error(Status::io_error, "cannot create '" + staging.string() + "': " + ec.message());
+    if (ec) throw Error(Status::io_error, "cannot create '" + path_to_utf8(staging) + "': " + ec.message());
     return staging;
 }
+
+// The UTF-8 path of one of the bake's files (ASCII names) in `folder`.
+std::string file_in(const fs::path& folder, const std::string& name) { return path_to_utf8(folder / name); }
 
 // The per-lobe colour needs a colour image of the normal map's size (the two arguments disagree).
 void require_color_size(const std::string& color_path, int width, int height, int map_width, int map_height)
@@ -106,7 +108,7 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
             for (int lobe = 0; lobe < pyramid.slots; ++lobe) names.push_back(mip_file_name(lobe));
         const AtlasLayout layout = pyramid_atlas_layout(pyramid);
         parallel_rows(int(names.size()), settings.threads, [&](int job) {
-            const std::string path = (staging / names[size_t(job)]).string();
+            const std::string path = file_in(staging, names[size_t(job)]);
             if (job >= lobe_jobs + atlas_jobs) {
                 write_mip_file(pyramid, decoded, settings, write, stats, job - lobe_jobs - atlas_jobs, path);
                 return;
@@ -129,7 +131,7 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
                 const auto textures = color_textures(pyramid, color, level);
                 for (int lobe = 0; lobe < pyramid.slots; ++lobe) {
                     names.push_back(color_file_name(level, lobe));
-                    write_rgba_exr((staging / names.back()).string(), size.width, size.height,
+                    write_rgba_exr(file_in(staging, names.back()), size.width, size.height,
                                    textures[size_t(lobe)].data(), write.precision,
                                    file_attributes(pyramid, decoded, settings, write, level, lobe,
                                                    stats[size_t(level)].fit.mean,
@@ -138,28 +140,32 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
             }
         }
         names.push_back(kLobeShaderFileName);
-        write_text_atomic((staging / names.back()).string(), lobe_shader_glsl(pyramid.slots, write.precision));
+        write_text_atomic(file_in(staging, names.back()), lobe_shader_glsl(pyramid.slots, write.precision));
         timings.write = seconds_since(start);
-        write_text_atomic((staging / "report.json").string(),
+        write_text_atomic(file_in(staging, "report.json"),
                           report_json(pyramid, decoded, settings, write, stats, timings, names));
         check_progress(progress, "write", 1.0);
 
-        // Commit: from here on only renames within one folder.
-        const std::set<std::string> fresh(names.begin(), names.end());
-        for (const auto& entry : fs::directory_iterator(out_dir)) {
-            const std::string name = entry.path().filename().string();
-            if (is_bake_file(name) && !fresh.count(name)) fs::remove(entry.path());
-        }
+        // Commit: only renames within one folder, all or nothing (commit_files): an earlier bake's
+        // files that this one does not write go, and if any file cannot be moved (on Windows: one
+        // open in another program) the folder keeps the earlier bake whole.
         names.push_back("report.json");
-        for (const std::string& name : names) {
-            fs::rename(staging / name, fs::path(out_dir) / name);
-            outcome.files.push_back((fs::path(out_dir) / name).string());
+        const std::set<std::string> fresh(names.begin(), names.end());
+        std::vector<std::string> retired;
+        for (const auto& entry : fs::directory_iterator(path_from_utf8(out_dir))) {
+            const std::string name = path_to_utf8(entry.path().filename());
+            if (is_bake_file(name) && !fresh.count(name)) retired.push_back(name);
         }
-        fs::remove(staging);
+        commit_files(path_to_utf8(staging), out_dir, names, retired);
+        for (const std::string& name : names) outcome.files.push_back(file_in(path_from_utf8(out_dir), name));
+        std::error_code ignored;
+        fs::remove_all(staging, ignored);  // empty now; one left behind is not a failed bake
     } catch (const fs::filesystem_error& e) {
         std::error_code ignored;
         fs::remove_all(staging, ignored);
-        throw Error(Status::io_error, std::string("cannot write into '") + out_dir + "': " + e.what());
+        std::string reason = e.code().message();
+        if (!e.path1().empty()) reason += " ('" + path_to_utf8(e.path1()) + "')";
+        throw Error(Status::io_error, "cannot write into '" + out_dir + "': " + reason);
     } catch (...) {
         std::error_code ignored;
         fs::remove_all(staging, ignored);
@@ -217,7 +223,7 @@ BakeOutcome bake_file_into(const std::string& input_path, const std::string& out
     timings.decode = seconds_since(start);
 
     WriteSettings named = write;
-    if (named.source_name.empty()) named.source_name = fs::path(input_path).filename().string();
+    if (named.source_name.empty()) named.source_name = path_to_utf8(path_from_utf8(input_path).filename());
     return fit_and_write(decoded, out_dir, settings, named, timings, progress);
 }
 

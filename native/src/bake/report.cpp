@@ -3,17 +3,15 @@
 #include "bake/report.h"
 
 #include <algorithm>
-#include <filesystem>
 
 #include "bake/lobe_atlas.h"
 #include "bake/lobe_files.h"
 #include "bake/memory_budget.h"
 #include "io/json_writer.h"
+#include "platform/files.h"
 #include "pyramid/footprint.h"
 
 namespace ndfbake {
-
-namespace fs = std::filesystem;
 
 namespace {
 
@@ -123,7 +121,7 @@ std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded,
         .value("measure", timings.measure)
         .value("write", timings.write)
         .end_object();
-    // Measured: the process's peak resident memory so far (getrusage), which includes the host
+    // Measured: the process's peak resident memory so far (peak_resident_bytes), which includes the host
     // application's own; estimated: this bake's peak as checked against the limit before it ran.
     json.value("peak_memory_bytes", process_peak_memory())
         .value("estimated_memory_bytes", memory.peak())
@@ -143,7 +141,7 @@ std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded,
             .value("tile", kMipTileSize)
             .end_object();
     json.begin_array("files");
-    for (const std::string& f : files) json.value(nullptr, fs::path(f).filename().string());
+    for (const std::string& f : files) json.value(nullptr, path_to_utf8(path_from_utf8(f).filename()));
     json.value(nullptr, "report.json");
     json.end_array();
     json.end_object();

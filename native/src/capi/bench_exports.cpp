@@ -1,13 +1,13 @@
 // The C API of the benchmark: parses the option lists and runs bench/benchmark.
 #include <algorithm>
 #include <cstdlib>
-#include <filesystem>
 #include <sstream>
 
 #include "bench/benchmark.h"
 #include "capi/context.h"
 #include "io/image_files.h"
 #include "io/normal_decode.h"
+#include "platform/files.h"
 #include "synth/patterns.h"
 
 namespace {
@@ -37,7 +37,7 @@ BenchSettings to_bench(const ndfb_bench_options* o)
             s.maps.emplace_back(pattern_name(p), synthesize(p, int(o->synthetic_size), int(o->synthetic_size)));
     for (size_t i = 0; i < o->map_count; ++i) {
         require(o->map_paths[i], "bench: map path is null");
-        s.maps.emplace_back(std::filesystem::path(o->map_paths[i]).stem().string(),
+        s.maps.emplace_back(path_to_utf8(path_from_utf8(o->map_paths[i]).stem()),
                             decode_normal_map(o->map_paths[i], DecodeOptions{}).map);
     }
     require(!s.maps.empty(), "bench: no maps (synthetic_size is 0 and no paths)");

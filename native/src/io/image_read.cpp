@@ -1,15 +1,12 @@
 #include "io/image_read.h"
 
-#include <cerrno>
-#include <cstring>
 #include <filesystem>
 #include <set>
 #include <vector>
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <OpenImageIO/strutil.h>
+
+#include "platform/files.h"
 
 namespace ndfbake {
 
@@ -47,7 +44,7 @@ const std::set<std::string>& known_extensions()
 
 bool has_known_image_extension(const std::string& path)
 {
-    const std::string ext = std::filesystem::path(path).extension().string();
+    const std::string ext = path_to_utf8(path_from_utf8(path).extension());
     return !ext.empty() && known_extensions().count(OIIO::Strutil::lower(ext.substr(1))) > 0;
 }
 
@@ -55,19 +52,19 @@ bool has_known_image_extension(const std::string& path)
 void check_readable_file(const std::string& path)
 {
     namespace fs = std::filesystem;
+    const fs::path file = path_from_utf8(path);
     std::error_code ec;
-    const fs::file_status status = fs::status(path, ec);
+    const fs::file_status status = fs::status(file, ec);
     if (!fs::exists(status))
         throw_read_error(Status::file_not_found, path, "no such file");
     if (!fs::is_regular_file(status))
         throw_read_error(Status::invalid_argument, path, "not a regular file");
-    if (fs::file_size(path, ec) == 0 && !ec)
+    if (fs::file_size(file, ec) == 0 && !ec)
         throw_read_error(Status::corrupt_file, path, "file is empty (0 bytes)");
 
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0)
-        throw_read_error(Status::io_error, path, std::strerror(errno));
-    ::close(fd);
+    const FileResult opened = check_file_opens(file);
+    if (!opened.ok)
+        throw_read_error(Status::io_error, path, opened.reason);
 }
 
 }  // namespace
@@ -97,7 +94,7 @@ std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path)
     if (has_known_image_extension(path))
         throw_read_error(Status::corrupt_file, path,
                          "damaged, or not really a " +
-                             std::filesystem::path(path).extension().string() + " file",
+                             path_to_utf8(path_from_utf8(path).extension()) + " file",
                          detail);
     throw_read_error(Status::unsupported_format, path, "not an image format OpenImageIO can read",
                      detail);

@@ -10,6 +10,7 @@
 
 #include "error.h"
 #include "io/atomic_file.h"
+#include "platform/files.h"
 
 // Written with OpenEXR's C core (OpenEXRCore), not OpenImageIO: it needs nothing but zlib and the
 // C library, so the Blender add-on's library can carry it (see native/CMakeLists.txt).
@@ -36,22 +37,12 @@ void remember_exr_message(exr_const_context_t, exr_result_t, const char* message
     throw Error(Status::io_error, "cannot write '" + path + "': " + detail);
 }
 
-// OpenEXR reports a failed write without the reason; the errno of the write is still set when it
-// returns. Only errors a write can raise are named, so a stale errno from an earlier, unrelated
-// call is never blamed.
-std::string write_errno_reason(int error)
-{
-    switch (error) {
-    case ENOSPC: case EFBIG: case EDQUOT: case EIO: case EROFS: case EACCES: case EPERM:
-        return std::string(" (") + std::strerror(error) + ")";
-    default: return {};
-    }
-}
-
 // Calls an OpenEXRCore function; a failure throws with the library's message (or its code's name).
 void check(exr_result_t result, const std::string& path)
 {
     if (result == EXR_ERR_SUCCESS) return;
+    // OpenEXR reports a failed write without the reason; the errno of the write is still set
+    // when it returns (write_errno_reason names only errors a write can raise).
     const int error = errno;
     const std::string message = t_exr_message.empty() ? exr_get_default_error_message(result) : t_exr_message;
     throw_write_error(path, message + write_errno_reason(error));

@@ -3,17 +3,17 @@
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
-#include <filesystem>
 #include <vector>
 
 #include "error.h"
 #include "io/atomic_file.h"
+#include "platform/files.h"
 
 namespace ndfbake {
 
 void write_normal_map(const std::string& path, const NormalMap& map)
 {
-    std::string extension = std::filesystem::path(path).extension().string();
+    std::string extension = path_to_utf8(path_from_utf8(path).extension());
     std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return char(std::tolower(c)); });
     OIIO::TypeDesc type = OIIO::TypeDesc::UINT8;
     if (extension == ".exr") type = OIIO::TypeDesc::FLOAT;

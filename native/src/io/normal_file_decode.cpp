@@ -9,6 +9,7 @@
 #include "error.h"
 #include "io/image_read.h"
 #include "io/normal_samples.h"
+#include "platform/files.h"
 
 namespace ndfbake {
 
@@ -16,7 +17,7 @@ namespace {
 
 uint64_t hash_file(const std::string& path)
 {
-    std::ifstream file(path, std::ios::binary);
+    std::ifstream file(path_from_utf8(path), std::ios::binary);
     Fnv1a64 hash;
     std::vector<char> buffer(1 << 16);
     while (file) {
