@@ -1,7 +1,11 @@
 // The `ndfbake` command line: a client of the public C API, like the Blender add-on.
+#if defined(_WIN32)
+#include <io.h>
+#include <process.h>
+#else
 #include <unistd.h>
+#endif
 
-#include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -14,6 +18,38 @@
 #include "ndfbake.h"
 
 namespace {
+
+// The two POSIX calls the command line makes, under their Windows C runtime names there.
+bool stderr_is_terminal()
+{
+#if defined(_WIN32)
+    return _isatty(_fileno(stderr)) != 0;
+#else
+    return isatty(fileno(stderr)) != 0;
+#endif
+}
+
+long process_id()
+{
+#if defined(_WIN32)
+    return long(_getpid());
+#else
+    return long(::getpid());
+#endif
+}
+
+// Paths are UTF-8 strings, as the C API takes them (a char path would be read in the ANSI code
+// page on Windows).
+std::filesystem::path path_from_utf8(const std::string& utf8)
+{
+    return std::filesystem::path(std::u8string(utf8.begin(), utf8.end()));
+}
+
+std::string path_to_utf8(const std::filesystem::path& path)
+{
+    const std::u8string utf8 = path.u8string();
+    return std::string(utf8.begin(), utf8.end());
+}
 
 const char* const kUsage = R"(ndfbake — normal-map NDF filtering (Han et al. 2007)
 
@@ -252,7 +288,7 @@ int run_bake(ndfb_context ctx, const Args& args)
     }
     if (out_dir.empty()) return fail(1, "bake needs --out DIR");
     if (!color.empty()) write.color_path = color.c_str();
-    progress.terminal = isatty(fileno(stderr)) != 0;
+    progress.terminal = stderr_is_terminal();
     fit.progress = print_progress;
     fit.progress_user = &progress;
 
@@ -302,10 +338,11 @@ int run_synth(ndfb_context ctx, const Args& args)
         ndfb_normal_map_destroy(map);
         return fail_status(ctx, NDFB_ERROR_CANCELLED);
     }
-    const std::filesystem::path target(out);
-    const std::string staging =
-        (target.parent_path() / ("." + target.stem().string() + ".synth-" + std::to_string(::getpid()) +
-                                 target.extension().string())).string();
+    const std::filesystem::path target = path_from_utf8(out);
+    const std::filesystem::path staged =
+        target.parent_path() / path_from_utf8("." + path_to_utf8(target.stem()) + ".synth-" +
+                                              std::to_string(process_id()) + path_to_utf8(target.extension()));
+    const std::string staging = path_to_utf8(staged);
     status = ndfb_normal_map_save(ctx, map, staging.c_str());
     ndfb_normal_map_destroy(map);
     if (status != NDFB_OK) {
@@ -314,14 +351,16 @@ int run_synth(ndfb_context ctx, const Args& args)
         for (size_t at; (at = message.find(staging)) != std::string::npos;) message.replace(at, staging.size(), out);
         return fail(exit_code_for(status), std::string(ndfb_status_name(status)) + ": " + message);
     }
+    std::error_code ignored;
     if (g_interrupted) {
-        std::remove(staging.c_str());
+        std::filesystem::remove(staged, ignored);
         return fail_status(ctx, NDFB_ERROR_CANCELLED);
     }
-    if (std::rename(staging.c_str(), out.c_str()) != 0) {
-        const std::string reason = std::strerror(errno);
-        std::remove(staging.c_str());
-        return fail(3, "i/o error: cannot write '" + out + "': " + reason);
+    std::error_code renamed;  // replaces an earlier --out, on Windows too (std::rename does not there)
+    std::filesystem::rename(staged, target, renamed);
+    if (renamed) {
+        std::filesystem::remove(staged, ignored);
+        return fail(3, "i/o error: cannot write '" + out + "': " + renamed.message());
     }
     return 0;
 }
