@@ -51,9 +51,6 @@ std::pair<float, float> derivative_lengths(const Vec3& v1, const Vec3& v2, const
 }
 
 constexpr float kSmallAngleCos = 0.9999f;  // below ~0.014 rad: asin(x) = x to 4e-5 relative
-// |q1|²|q2|² below this takes the scalar path: the small-angle branch's |q1 × q2|² is at most
-// this times sin² (≤ 2e-4 there), which must stay a normal float with digits to spare.
-constexpr float kMinSimdEdgeProduct = 1e-24f;
 
 // Exact square roots and divisions: the reference path, and the fallback for lengths so small
 // (below FLT_MIN squared) that the hardware inverse square root estimate is not usable.
@@ -71,6 +68,10 @@ void scalar_contributions(const std::array<Vec3, 3>& p, const Vec3 (&n)[3], cons
 }
 
 #if defined(__SSE2__)
+// |q1|²|q2|² below this takes the scalar path: the small-angle branch's |q1 × q2|² is at most
+// this times sin² (≤ 2e-4 there), which must stay a normal float with digits to spare.
+constexpr float kMinSimdEdgeProduct = 1e-24f;
+
 // Lanes 0..2 are the corners; lane 3 is zero and ignored. Returns false (and leaves the work to
 // the scalar path) when a squared length is positive but below FLT_MIN, or not finite.
 bool simd_contributions(const std::array<Vec3, 3>& p, const Vec3 (&n)[3], const Vec3& tangent, float* cx,
