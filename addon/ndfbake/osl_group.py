@@ -50,14 +50,15 @@ UNSUPPORTED_INPUTS = specular_split.LAYERED_INPUTS + ("Subsurface Weight", "Thin
 
 def _oslquery_path():
     """Cycles compiles a Script node with its `oslquery` module, which Blender's own Python finds
-    but the bpy module (PyPI) keeps in <version>/python/lib/python3.X/site-packages: add it."""
+    but the bpy module (PyPI) keeps in <version>/python/lib/python3.X/site-packages
+    (<version>/python/lib/site-packages on Windows): add it."""
     try:
         import oslquery  # noqa: F401
         return True
     except ImportError:
         pass
-    for path in glob.glob(os.path.join(bpy.utils.resource_path("LOCAL"), "python", "lib", "python3*",
-                                       "site-packages")):
+    lib = os.path.join(bpy.utils.resource_path("LOCAL"), "python", "lib")
+    for path in glob.glob(os.path.join(lib, "python3*", "site-packages")) + [os.path.join(lib, "site-packages")]:
         if os.path.isdir(os.path.join(path, "oslquery")) and path not in sys.path:
             sys.path.append(path)
     try:
