@@ -30,8 +30,9 @@ NOBODY = 65534
 
 @contextlib.contextmanager
 def unprivileged():
-    """Runs the block with an unprivileged effective uid when the tests run as root."""
-    if os.geteuid() != 0:
+    """Runs the block with an unprivileged effective uid when the tests run as root (not on
+    Windows, which has no uids)."""
+    if not hasattr(os, "geteuid") or os.geteuid() != 0:
         yield
         return
     os.setegid(NOBODY)
@@ -209,11 +210,27 @@ def test_object_space_normal_map():
     _case(run)
 
 
+def _denies_new_files(directory):
+    """Whether the bake (run unprivileged) cannot make a folder in `directory`. A folder's read-only
+    attribute on Windows binds nothing (it is for files), nor does a Linux mode under wine as root."""
+    probe = os.path.join(directory, "probe")
+    try:
+        with unprivileged():
+            os.mkdir(probe)
+    except PermissionError:
+        return True
+    os.rmdir(probe)
+    return False
+
+
 def test_read_only_output_folder():
     def run(directory):
         material = h.baked_scene(directory)
         os.chmod(directory, 0o555)
         try:
+            if not _denies_new_files(directory):
+                print("  skipped: a read-only folder takes new files here (%s)" % sys.platform)
+                return
             expect_refused(material, "OUTPUT_NOT_WRITABLE", ["cannot write the lobe folder",
                                                             os.path.join(directory, "Bumpy.ndfbake"),
                                                             "Permission denied"], directory, wrap=unprivileged)

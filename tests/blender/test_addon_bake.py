@@ -49,7 +49,7 @@ def test_blender_decodes_the_map_as_the_command_line_does():
     for the same 8-bit PNG every lobe texel of every level must agree to the last bit (EM breaks
     a symmetric NDF's ties by rounding, so a last-bit difference can change the fit)."""
     library, _ = h.arguments()
-    cli = os.path.join(os.path.dirname(library), "ndfbake")
+    cli = os.path.join(os.path.dirname(library), "ndfbake.exe" if sys.platform == "win32" else "ndfbake")
     h.expect(os.path.isfile(cli), "no command line beside the library: %s" % cli)
     with h.scratch_dir() as directory:
         png = h.write_normal_map(os.path.join(directory, "bumps.png"), "bumps", 64)

@@ -2,7 +2,8 @@
 
     blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_X.py -- LIB [ZIP]
 
-LIB is the built libndfbake.so (NDFBAKE_LIBRARY is set to it), ZIP the add-on zip the build made.
+LIB is the built libndfbake.so (ndfbake.dll on Windows; NDFBAKE_LIBRARY is set to it), ZIP the add-on
+zip the build made.
 The add-on is imported from the source tree (addon/) and registered; test_addon_install.py checks
 the zip path instead. Not a test itself (ctest runs the files it lists).
 """
@@ -34,6 +35,10 @@ import demo_build  # noqa: E402  (the demo's scene and map writers; it imports t
 EXTENSIONS = bpy.app.version >= (4, 2, 0)
 
 
+# The library's file on this system (native.LIBRARY_NAME, named here without importing the add-on).
+LIBRARY_NAME = {"win32": "ndfbake.dll", "darwin": "libndfbake.dylib"}.get(sys.platform, "libndfbake.so")
+
+
 def _script_arguments():
     """The arguments after Blender's `--`."""
     return sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
@@ -41,7 +46,7 @@ def _script_arguments():
 
 def arguments():
     argv = _script_arguments()
-    library = os.path.abspath(argv[0]) if argv else os.path.join(REPO, "build", "native", "libndfbake.so")
+    library = os.path.abspath(argv[0]) if argv else os.path.join(REPO, "build", "native", LIBRARY_NAME)
     zip_path = os.path.abspath(argv[1]) if len(argv) > 1 else ""
     return library, zip_path
 
