@@ -2,8 +2,8 @@
 
 The library is looked for, in order:
 1. the file named by the environment variable NDFBAKE_LIBRARY (tests, development);
-2. libndfbake.so inside this add-on's folder (what the extension and add-on zips carry, with the
-   libraries it bundles);
+2. LIBRARY_NAME (ndfbake.dll, libndfbake.dylib or libndfbake.so) inside this add-on's folder
+   (what the platform's extension zip and the add-on zip carry);
 3. build/native/libndfbake.so of the source checkout this folder sits in (the full library, with
    image files; addon/ndfbake used straight from the repository after `bash scripts/build.sh`);
    only inside a checkout.
@@ -19,6 +19,7 @@ must not touch bpy. Each thread uses its own Context (a context is single-thread
 """
 import ctypes
 import os
+import sys
 import threading
 
 # The ABI this module's structures and signatures are written against (ndfb_abi_version()).
@@ -43,7 +44,13 @@ BRDF_GGX, BRDF_BLINN_PHONG, BRDF_LAMBERT, BRDF_BECKMANN = 0, 1, 2, 3
 PRECISION_HALF, PRECISION_FLOAT = 0, 1
 FIT_PER_LEVEL, FIT_HIERARCHICAL = 0, 1
 
-LIBRARY_NAME = "libndfbake.so"
+# The library's file on each platform (each platform's extension zip carries its own).
+if sys.platform == "win32":
+    LIBRARY_NAME = "ndfbake.dll"
+elif sys.platform == "darwin":
+    LIBRARY_NAME = "libndfbake.dylib"
+else:
+    LIBRARY_NAME = "libndfbake.so"
 ENV_VARIABLE = "NDFBAKE_LIBRARY"
 
 # Room for any version of an option structure the library's *_init may write (see init_options).
@@ -406,7 +413,7 @@ def load():
         tried = []
         env = os.environ.get(ENV_VARIABLE)
         if env and not os.path.isfile(env):  # asked for: not silently another library
-            _failure = "%s=%s is not a file; point it at libndfbake.so or unset it" % (ENV_VARIABLE, env)
+            _failure = "%s=%s is not a file; point it at %s or unset it" % (ENV_VARIABLE, env, LIBRARY_NAME)
             raise LibraryError(_failure)
         for path in candidate_paths():
             if not os.path.isfile(path):
