@@ -17,7 +17,10 @@ packages=(build-essential cmake pkg-config libopenimageio-dev libopenexr-dev ope
           libegl1 libegl-mesa0   # EEVEE in `blender -b` renders through surfaceless EGL (Mesa)
           libxrender1 libxi6 libxfixes3 libxkbcommon0 libsm6 libgl1  # what the bpy wheels link
           clang libclang-rt-14-dev   # clang + libFuzzer: the fuzz targets (scripts/fuzz.sh)
-          debootstrap)           # the Debian 13 and 11 chroots (install-debian13-blender.sh, install-debian11-runtime.sh)
+          debootstrap            # the Debian 13 and 11 chroots (install-debian13-blender.sh, install-debian11-runtime.sh)
+          lld-14                 # ld64.lld links the macOS add-on libraries (native/cmake/zig_darwin_link.py)
+          llvm                   # llvm-objdump, -nm, -readelf read every platform's library (check_platform_library.py)
+          qemu-user libc6-arm64-cross)  # the Linux-on-ARM library bakes under qemu-aarch64 with Debian's arm64 glibc
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

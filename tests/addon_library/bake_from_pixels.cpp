@@ -1,11 +1,16 @@
-// The add-on's library as Blender loads it: dlopen'ed from its own folder by a process with an
+// The add-on's library as Blender loads it: loaded from its own folder by a process with an
 // empty environment (no LD_LIBRARY_PATH), it must find what it needs there, bake pixels from
 // memory through ndfb_bake_map, and refuse every call that needs image files with
-// NDFB_ERROR_UNSUPPORTED_FORMAT and a message saying what to call instead.
-// Usage: addon_library_bake_from_pixels <folder>/libndfbake.so <out_dir>
+// NDFB_ERROR_UNSUPPORTED_FORMAT and a message saying what to call instead. Built for every
+// platform that runs here (Linux natively and under qemu-user, Windows under wine).
+// Usage: addon_library_bake_from_pixels <folder>/<library file> <out_dir>
 // Prints one line per check; exit status 0 when all pass.
+#ifdef _WIN32
+#include <windows.h>
+#else
 #include <dlfcn.h>
 #include <link.h>
+#endif
 
 #include <cmath>
 #include <cstdio>
@@ -26,13 +31,19 @@ void check(bool ok, const std::string& what)
     if (!ok) ++g_failures;
 }
 
-// The C API, looked up in the library dlopen returned.
+// The C API, looked up in the library the OS loaded.
 struct Api {
+#ifdef _WIN32
+    HMODULE library = nullptr;
+    void* symbol(const char* name) { return reinterpret_cast<void*>(GetProcAddress(library, name)); }
+#else
     void* library = nullptr;
+    void* symbol(const char* name) { return dlsym(library, name); }
+#endif
     template <typename Fn>
     Fn* get(const char* name)
     {
-        auto* fn = reinterpret_cast<Fn*>(dlsym(library, name));
+        auto* fn = reinterpret_cast<Fn*>(symbol(name));
         if (!fn) {
             std::printf("FAIL: %s is not exported\n", name);
             std::exit(1);
@@ -42,12 +53,15 @@ struct Api {
 };
 #define NDFB(api, name) (api).get<decltype(name)>(#name)
 
+#ifndef _WIN32
 // Every loaded object outside the C and C++ runtimes must come from the library's own folder.
+// (On Windows the DLL's import table says the same: check_platform_library.py reads it.)
 int check_loaded_object(dl_phdr_info* info, size_t, void* data)
 {
     static const std::set<std::string> runtime = {"libc.so.6", "libm.so.6", "libstdc++.so.6", "libgcc_s.so.1",
-                                                  "ld-linux-x86-64.so.2", "libpthread.so.0", "libdl.so.2",
-                                                  "librt.so.1", "linux-vdso.so.1"};
+                                                  "ld-linux-x86-64.so.2", "ld-linux-aarch64.so.1",
+                                                  "libpthread.so.0", "libdl.so.2", "librt.so.1",
+                                                  "linux-vdso.so.1"};
     const std::string path = info->dlpi_name ? info->dlpi_name : "";
     if (path.empty()) return 0;  // the program itself
     const std::filesystem::path file(path);
@@ -56,24 +70,34 @@ int check_loaded_object(dl_phdr_info* info, size_t, void* data)
         check(file.parent_path() == folder, "loaded from the library's folder: " + path);
     return 0;
 }
+#endif
 
 }  // namespace
 
 int main(int argc, char** argv)
 {
     if (argc != 3) {
-        std::fprintf(stderr, "usage: %s <folder>/libndfbake.so <out_dir>\n", argv[0]);
+        std::fprintf(stderr, "usage: %s <folder>/<library file> <out_dir>\n", argv[0]);
         return 2;
     }
-    const std::string library_path = std::filesystem::canonical(argv[1]).string(), out_dir = argv[2];
+    const std::filesystem::path library_file = std::filesystem::canonical(argv[1]);
+    const std::string out_dir = argv[2];
     Api api;
-    api.library = dlopen(library_path.c_str(), RTLD_NOW | RTLD_LOCAL);
+#ifdef _WIN32
+    api.library = LoadLibraryW(library_file.wstring().c_str());
+    if (!api.library) {
+        std::printf("FAIL: LoadLibraryW: error %lu\n", GetLastError());
+        return 1;
+    }
+#else
+    api.library = dlopen(library_file.c_str(), RTLD_NOW | RTLD_LOCAL);
     if (!api.library) {
         std::printf("FAIL: dlopen: %s\n", dlerror());
         return 1;
     }
-    std::string folder = std::filesystem::path(library_path).parent_path().string();
+    std::string folder = library_file.parent_path().string();
     dl_iterate_phdr(&check_loaded_object, &folder);
+#endif
 
     check(NDFB(api, ndfb_abi_version)() == NDFB_ABI_VERSION, "ABI version");
     check(NDFB(api, ndfb_has_image_files)() == 0, "ndfb_has_image_files() is 0");
