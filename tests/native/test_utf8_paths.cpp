@@ -155,6 +155,20 @@ TEST_F(Utf8Paths, AFailureNamesTheFolderInUtf8)
     EXPECT_EQ(read_bytes(file), "not a folder");
 }
 
+// A path in another encoding (here "Zoë" in Windows-1252, as a program's char argv arrives
+// there) cannot name a file on Windows: the message says what is wrong. POSIX names are bytes.
+TEST_F(Utf8Paths, APathThatIsNotUtf8IsRefusedOnWindows)
+{
+#if defined(_WIN32)
+    const std::string folder = utf8(root_) + "\\Zo\xeb";
+    ASSERT_EQ(ndfb_bake_map(ctx_, map_, folder.c_str(), &fit_, &write_), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(ndfb_last_error(ctx_)).find("is not UTF-8"), std::string::npos) << ndfb_last_error(ctx_);
+    EXPECT_TRUE(fs::is_empty(root_));
+#else
+    GTEST_SKIP() << "POSIX file names are bytes";
+#endif
+}
+
 TEST_F(Utf8Paths, ImageFilesWithNonAsciiNamesAreReadAndWritten)
 {
     if (!ndfb_has_image_files()) GTEST_SKIP() << "this library reads and writes no image files";

@@ -2,6 +2,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <utility>
 
 #if defined(_WIN32)
 #ifndef WIN32_LEAN_AND_MEAN
@@ -18,20 +19,11 @@
 #include <cstdio>
 #endif
 
+#include "error.h"
+
 namespace ndfbake {
 
 namespace fs = std::filesystem;
-
-fs::path path_from_utf8(std::string_view utf8)
-{
-    return fs::path(std::u8string_view(reinterpret_cast<const char8_t*>(utf8.data()), utf8.size()));
-}
-
-std::string path_to_utf8(const fs::path& path)
-{
-    const std::u8string utf8 = path.u8string();
-    return std::string(utf8.begin(), utf8.end());
-}
 
 std::string write_errno_reason(int error)
 {
@@ -80,6 +72,33 @@ std::string windows_error_message(DWORD error)
 }
 
 FileResult failure(DWORD error) { return {false, false, windows_error_message(error)}; }
+
+}  // namespace
+
+// Converted here rather than by libc++ (path(std::u8string), path::u8string()), which throws a
+// bare "locale not supported" for bytes that are not UTF-8: such a path gets a message that says
+// what is wrong. A file name that is not valid UTF-16 (an unpaired surrogate) comes back with
+// U+FFFD in its place.
+fs::path path_from_utf8(std::string_view utf8)
+{
+    if (utf8.empty()) return {};
+    const int length = int(utf8.size());
+    const int wide_length = MultiByteToWideChar(CP_UTF8, MB_ERR_INVALID_CHARS, utf8.data(), length, nullptr, 0);
+    if (wide_length <= 0)
+        throw Error(Status::invalid_argument,
+                    "the path '" + std::string(utf8) + "' is not UTF-8 text (ndfbake takes paths as UTF-8)");
+    std::wstring wide(size_t(wide_length), L'\0');
+    MultiByteToWideChar(CP_UTF8, MB_ERR_INVALID_CHARS, utf8.data(), length, wide.data(), wide_length);
+    return fs::path(std::move(wide));
+}
+
+std::string path_to_utf8(const fs::path& path)
+{
+    const std::wstring& wide = path.native();
+    return wide.empty() ? std::string() : utf8_from_wide(wide.data(), int(wide.size()));
+}
+
+namespace {
 
 bool is_held_by_another_program(DWORD error)
 {
@@ -137,6 +156,18 @@ FileResult replace_file(const fs::path& from, const fs::path& to)
 }
 
 #else  // POSIX: Linux, macOS
+
+// POSIX paths are bytes, UTF-8 by convention: both are plain copies.
+fs::path path_from_utf8(std::string_view utf8)
+{
+    return fs::path(std::u8string_view(reinterpret_cast<const char8_t*>(utf8.data()), utf8.size()));
+}
+
+std::string path_to_utf8(const fs::path& path)
+{
+    const std::u8string utf8 = path.u8string();
+    return std::string(utf8.begin(), utf8.end());
+}
 
 namespace {
 

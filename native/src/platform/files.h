@@ -6,7 +6,8 @@
 // ::open() read a char string in the ANSI code page, so a folder like "C:\Users\Zoë\材質" breaks.
 // Every path that crosses from a std::string into the file system, or back into a message or a
 // returned name, goes through path_from_utf8 / path_to_utf8 (char8_t conversions: exact on every
-// platform, a plain copy on POSIX).
+// platform, a plain copy on POSIX). On Windows, bytes that are not UTF-8 throw
+// Error(invalid_argument) saying so.
 #pragma once
 
 #include <cstdint>
