@@ -73,6 +73,13 @@ std::string windows_error_message(DWORD error)
 
 FileResult failure(DWORD error) { return {false, false, windows_error_message(error)}; }
 
+// What MoveFileExW reports for a file another program holds open: a sharing violation for the
+// file moved, access denied for the one replaced (also for a read-only one).
+bool is_held_by_another_program(DWORD error)
+{
+    return error == ERROR_SHARING_VIOLATION || error == ERROR_ACCESS_DENIED || error == ERROR_LOCK_VIOLATION;
+}
+
 }  // namespace
 
 // Converted here rather than by libc++ (path(std::u8string), path::u8string()), which throws a
@@ -97,15 +104,6 @@ std::string path_to_utf8(const fs::path& path)
     const std::wstring& wide = path.native();
     return wide.empty() ? std::string() : utf8_from_wide(wide.data(), int(wide.size()));
 }
-
-namespace {
-
-bool is_held_by_another_program(DWORD error)
-{
-    return error == ERROR_SHARING_VIOLATION || error == ERROR_ACCESS_DENIED || error == ERROR_LOCK_VIOLATION;
-}
-
-}  // namespace
 
 uint64_t current_process_id() { return GetCurrentProcessId(); }
 
@@ -149,8 +147,9 @@ FileResult replace_file(const fs::path& from, const fs::path& to)
         if (!is_held_by_another_program(error)) return failure(error);
         if (attempt == kReplaceAttempts)
             return {false, true,
-                    "it is open in another program (" + windows_error_message(error) +
-                        "); close it there and try again"};
+                    std::string(error == ERROR_ACCESS_DENIED ? "it is open in another program, or read-only"
+                                                             : "it is open in another program") +
+                        " (" + windows_error_message(error) + "); close it there and try again"};
         Sleep(kReplaceRetryDelayMs);
     }
 }
