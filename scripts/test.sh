@@ -20,13 +20,18 @@ bash "$root/scripts/install-deps.sh"
 bash "$root/scripts/build.sh"
 build=${NDFBAKE_BUILD_DIR:-$root/build}
 stage "ctest (build): native tests and Debian's Blender $(blender --version 2>/dev/null | head -1 | cut -d' ' -f2)"
-(cd "$build" && ctest --output-on-failure -j "$(nproc)" -LE 'bpy-|debian13')
+(cd "$build" && ctest --output-on-failure -j "$(nproc)" -LE 'bpy-|debian13|windows-')
 stage "ctest (build): Debian 13's Blender 4.3 (chroot)"
 (cd "$build" && ctest --output-on-failure -j "$(nproc)" -L debian13)
 # The Blender tests again in each bpy series installed (tests/CMakeLists.txt: NDFBAKE_BPY_SERIES).
 for series in $(cd "$build" && ctest -N --print-labels | sed -n 's/^ *bpy-//p'); do
   stage "ctest (build): Blender $series (bpy module)"
   (cd "$build" && ctest --output-on-failure -j "$(nproc)" -L "bpy-$series\$")
+done
+# And in each Windows bpy series under wine (NDFBAKE_TEST_WINDOWS_BPY_SERIES).
+for series in $(cd "$build" && ctest -N --print-labels | sed -n 's/^ *windows-//p'); do
+  stage "ctest (build): Windows Blender $series (bpy module under wine)"
+  (cd "$build" && ctest --output-on-failure -j "$(nproc)" -L "windows-$series\$")
 done
 
 if [ "${NDFBAKE_SANITIZE_TESTS:-1}" != 0 ]; then

@@ -142,8 +142,11 @@ TEST(HierarchicalFit, MatchesThePerLevelReferenceOnEveryPattern)
         }
         std::printf("%-9s hierarchical %.4f  per-level %.4f  (%+.1f%%)\n", pattern_name(pattern), h, r,
                     100.0 * (h / r - 1.0));
-        // Per pattern the two EMs find different local optima; no pattern may be far off.
-        EXPECT_LT(h, 1.25 * r) << pattern_name(pattern);
+        // Per pattern the two EMs find different local optima; no pattern may be far off. A pattern
+        // both fit exactly (vgroove: two normals) measures 0 or float rounding, whose size depends
+        // on the platform's libm (1.7e-5 with Windows' UCRT), so a ratio to it means nothing.
+        constexpr double kExactFitError = 1e-4;
+        EXPECT_LT(h, 1.25 * r + kExactFitError) << pattern_name(pattern);
         hierarchical_total += h;
         reference_total += r;
     }
