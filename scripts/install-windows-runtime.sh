@@ -28,7 +28,8 @@ Blender 5.0 maps image files with VirtualAlloc2(MEM_RESERVE_PLACEHOLDER) + MapVi
 kernelbase.dll exports both (BLI_mmap.cc); wine 8.0 exports them but refuses placeholders
 (ERROR_INVALID_PARAMETER), so every image file load fails ("couldn't get mapping"). Hiding the
 MapViewOfFile3 export from GetProcAddress sends Blender to its fallback (CreateFileMapping +
-MapViewOfFile, as on Windows before 10 1803; Blender 4.2 maps files so always). Only under wine."""
+MapViewOfFile, as on Windows before 10 1803; Blender 4.2 maps files so always). Only under wine.
+And TEMP is the run's own folder (_own_temp)."""
 
 
 def _hide_map_view_of_file3():
@@ -65,8 +66,20 @@ def _hide_map_view_of_file3():
             return
 
 
+def _own_temp():
+    """The TEMP folder scripts/windows-bpy.sh made for this run (wine sets TEMP from its registry,
+    over the environment it is given). Blender names its session folder there blender_<letter><pid>,
+    26 names per process id, and wine gives each process one of the same few ids: the folders that
+    quick exits (os._exit) leave would soon take all 26, in a TEMP shared by every run."""
+    import os
+    temp = os.environ.get("NDFBAKE_WINE_TEMP")
+    if temp:
+        os.environ["TEMP"] = os.environ["TMP"] = temp
+
+
 try:
     _hide_map_view_of_file3()
+    _own_temp()
 except Exception as e:  # never stop Python from starting
     import sys
     print("sitecustomize (wine fixes):", e, file=sys.stderr)
@@ -78,7 +91,10 @@ need_wine=0; need_python=0; need_site=0; need_prefix=0; need_series=()
 { command -v wine >/dev/null && command -v winepath >/dev/null && [ -x /usr/lib/wine/wine64 ]; } || need_wine=1
 [ -f "$cache/python/python.exe" ] || need_python=1
 [ -d "$cache/site-packages/numpy" ] || need_site=1
-[ -f "$cache/prefix/system.reg" ] || need_prefix=1
+# The prefix, with no crash debugger: winedbg would report a crash and end Python with status 0.
+aedebug_values=$(grep -A3 -F '[Software\\Microsoft\\Windows NT\\CurrentVersion\\AeDebug]' \
+                 "$cache/prefix/system.reg" 2>/dev/null || true)
+{ grep -qx '"Debugger"=""' <<<"$aedebug_values" && grep -qx '"Auto"="1"' <<<"$aedebug_values"; } || need_prefix=1
 need_site_fix=0
 cmp -s "$cache/wine-site/sitecustomize.py" <(sitecustomize) || need_site_fix=1
 for s in "${series[@]}"; do
@@ -170,11 +186,20 @@ done
 export WINEPREFIX=$cache/prefix WINEDEBUG=-all WINEARCH=win64
 if [ $need_prefix = 1 ]; then
   say "wine prefix $WINEPREFIX"
-  rm -rf "$WINEPREFIX"
-  # mscoree/mshtml off: no Mono or Gecko installer (nothing here needs .NET or a browser engine).
-  WINEDLLOVERRIDES="mscoree,mshtml=" wine wineboot --init </dev/null >/dev/null 2>&1 || true
+  if [ ! -f "$WINEPREFIX/system.reg" ]; then
+    rm -rf "$WINEPREFIX"
+    # mscoree/mshtml off: no Mono or Gecko installer (nothing here needs .NET or a browser engine).
+    WINEDLLOVERRIDES="mscoree,mshtml=" wine wineboot --init </dev/null >/dev/null 2>&1 || true
+    wineserver --wait || true
+    [ -f "$WINEPREFIX/system.reg" ] || { say "wineboot did not make $WINEPREFIX"; exit 1; }
+  fi
+  # An unhandled exception then ends the process with the exception code's low byte (5: access
+  # violation) instead of winedbg's backtrace and status 0, which would pass a crashed test; Auto
+  # 1: no crash dialog, which with a display (xvfb-run) would wait for a click forever.
+  aedebug='HKLM\Software\Microsoft\Windows NT\CurrentVersion\AeDebug'
+  wine reg add "$aedebug" /v Debugger /d "" /f </dev/null >/dev/null 2>&1
+  wine reg add "$aedebug" /v Auto /d 1 /f </dev/null >/dev/null 2>&1
   wineserver --wait || true
-  [ -f "$WINEPREFIX/system.reg" ] || { say "wineboot did not make $WINEPREFIX"; exit 1; }
 fi
 
 # --- check what was installed ------------------------------------------------------------------

@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
-# Runs the Windows CPython 3.11 with the Windows bpy of Blender SERIES under wine, headless
-# (scripts/install-windows-runtime.sh installs both into $NDFBAKE_WINDOWS_CACHE, default
-# /var/cache/ndfbake/windows):
+# Runs the Windows CPython 3.11 with the Windows bpy of Blender SERIES under wine, headless (under
+# xvfb-run where no DISPLAY is set, for OpenGL; scripts/install-windows-runtime.sh installs Python
+# and bpy into $NDFBAKE_WINDOWS_CACHE, default /var/cache/ndfbake/windows):
 #   bash scripts/windows-bpy.sh SERIES script.py -- ARGS...     (or SERIES -c CODE ..., as python)
 # Arguments that are absolute Linux paths of something that exists, or whose folder exists, are
 # passed as Windows paths (drive Z: is /, so /a/b is Z:\a\b, as `winepath -w` writes it); so are the
 # environment variables that hold paths (BLENDER_USER_*, NDFBAKE_LIBRARY). Everything else goes
-# as it is. Python's exit status is this script's. No display is needed: bpy runs in the
-# background and wine starts no window for a console program.
+# as it is. Python's exit status is this script's (a crash: the exception code's low byte, as
+# 5 for an access violation; the prefix has no crash debugger).
 set -euo pipefail
 if [ $# -lt 1 ]; then
   echo "usage: $0 SERIES script.py [-- ARGS...]" >&2
@@ -27,6 +27,16 @@ export WINEDLLOVERRIDES=${WINEDLLOVERRIDES:-mscoree,mshtml=}
 if [ "$(readlink "$WINEPREFIX/dosdevices/z:")" != / ]; then
   echo "$0: drive Z: of $WINEPREFIX is not /" >&2
   exit 2
+fi
+
+# Drawing (EEVEE, the gpu module) needs OpenGL, which wine gets from an X display: without one,
+# Blender's first EEVEE render crashes. So without DISPLAY this runs itself under xvfb-run (Mesa's
+# llvmpipe; EEVEE renders as fast as Linux bpy's does); NDFBAKE_WINE_HEADLESS=1 runs with no X
+# at all (all but EEVEE and the gpu module work).
+if [ "${NDFBAKE_WINE_HEADLESS:-0}" = 1 ]; then
+  unset DISPLAY WAYLAND_DISPLAY
+elif [ -z "${DISPLAY:-}" ] && command -v xvfb-run >/dev/null; then
+  exec xvfb-run -a -s "-screen 0 1280x800x24" bash "$0" "$series" "$@"
 fi
 
 # A Linux path as Windows sees it through drive Z: (what `winepath -w` prints, without starting wine).
@@ -59,8 +69,14 @@ export PYTHONPATH="$(windows_path "$cache/wine-site");$(windows_path "$cache/bpy
 export PYTHONNOUSERSITE=1
 # Output reaches a Linux pipe: UTF-8 whatever the console code page.
 export PYTHONIOENCODING=utf-8
-# Nothing to draw on: no X display (wine would otherwise connect to one for nothing).
-unset DISPLAY WAYLAND_DISPLAY
+
+# A TEMP folder of this run's own, C:\ndfbake-temp\run.*, deleted after it: Blender's session
+# folders in a TEMP that every run shares would soon take all the names it tries (sitecustomize.py
+# of install-windows-runtime.sh sets TEMP from NDFBAKE_WINE_TEMP: wine sets TEMP itself).
+mkdir -p "$WINEPREFIX/drive_c/ndfbake-temp"
+run_temp=$(mktemp -d "$WINEPREFIX/drive_c/ndfbake-temp/run.XXXXXX")
+trap 'rm -rf "$run_temp"' EXIT
+export NDFBAKE_WINE_TEMP="C:\\ndfbake-temp\\${run_temp##*/}"
 
 # Python under wine 8 cannot open a standard stream that is a regular file (init_sys_streams:
 # "[WinError 6] Invalid handle"): a redirected one goes through a pipe and cat.
@@ -68,11 +84,10 @@ pipes=()
 if [ -f /proc/self/fd/0 ]; then exec 0< <(cat); fi
 if [ -f /proc/self/fd/1 ]; then exec 1> >(cat); pipes+=($!); fi
 if [ -f /proc/self/fd/2 ]; then exec 2> >(cat >&2); pipes+=($!); fi
-if [ ${#pipes[@]} = 0 ]; then
-  exec wine "$cache/python/python.exe" "${args[@]}"
-fi
 status=0
 wine "$cache/python/python.exe" "${args[@]}" || status=$?
-exec 1>&- 2>&-  # cat sees the end of its pipe, writes the rest and exits
-wait "${pipes[@]}" || true
+if [ ${#pipes[@]} -gt 0 ]; then
+  exec 1>&- 2>&-  # cat sees the end of its pipe, writes the rest and exits
+  wait "${pipes[@]}" || true
+fi
 exit "$status"
