@@ -8,7 +8,6 @@
 #   site-packages numpy
 #   bpy-SERIES/   the bpy package of that series
 #   prefix/       the wine prefix (WINEPREFIX)
-#   wine-site/    sitecustomize.py: what wine 8.0 lacks, worked around in each Windows Python
 # scripts/windows-bpy.sh runs a script there. What is present is left alone (each part is written
 # under a temporary name and renamed when complete), so a second run prints one line.
 #   bash scripts/install-windows-runtime.sh [SERIES...]     (default: 4.2 5.0)
@@ -17,74 +16,6 @@ set -euo pipefail
 cache=${NDFBAKE_WINDOWS_CACHE:-/var/cache/ndfbake/windows}
 if [ $# -gt 0 ]; then series=("$@"); else series=(4.2 5.0); fi
 say() { echo "== install-windows-runtime.sh: $*"; }
-
-# The sitecustomize.py of wine-site/ (on PYTHONPATH in scripts/windows-bpy.sh).
-sitecustomize() {
-  cat <<'PYTHON'
-"""Wine 8.0 (Debian 12) fixes for Blender's Windows builds, loaded by every Windows Python that
-scripts/windows-bpy.sh starts (written by scripts/install-windows-runtime.sh).
-
-Blender 5.0 maps image files with VirtualAlloc2(MEM_RESERVE_PLACEHOLDER) + MapViewOfFile3 when
-kernelbase.dll exports both (BLI_mmap.cc); wine 8.0 exports them but refuses placeholders
-(ERROR_INVALID_PARAMETER), so every image file load fails ("couldn't get mapping"). Hiding the
-MapViewOfFile3 export from GetProcAddress sends Blender to its fallback (CreateFileMapping +
-MapViewOfFile, as on Windows before 10 1803; Blender 4.2 maps files so always). Only under wine.
-And TEMP is the run's own folder (_own_temp)."""
-
-
-def _hide_map_view_of_file3():
-    import ctypes
-    from ctypes import wintypes
-    kernel32 = ctypes.WinDLL("kernel32", use_last_error=True)
-    kernel32.GetModuleHandleW.restype = ctypes.c_void_p
-    kernel32.GetModuleHandleW.argtypes = [wintypes.LPCWSTR]
-    ntdll = kernel32.GetModuleHandleW("ntdll.dll")
-    kernel32.GetProcAddress.restype = ctypes.c_void_p
-    kernel32.GetProcAddress.argtypes = [ctypes.c_void_p, ctypes.c_char_p]
-    if not ntdll or not kernel32.GetProcAddress(ntdll, b"wine_get_version"):
-        return  # real Windows: placeholders work
-    base = kernel32.GetModuleHandleW("kernelbase.dll")
-    if not base:
-        return
-    u32 = lambda address: ctypes.c_uint32.from_address(address).value
-    nt = base + u32(base + 0x3C)
-    export_rva = u32(nt + 24 + 112)  # PE32+ optional header: DataDirectory[EXPORT]
-    if not export_rva:
-        return
-    exports = base + export_rva
-    count, names = u32(exports + 24), base + u32(exports + 32)
-    for i in range(count):
-        name = base + u32(names + 4 * i)
-        if ctypes.string_at(name) == b"MapViewOfFile3":
-            # "MapViewOfFile2" sorts just before: the name table stays sorted for the binary search.
-            old = wintypes.DWORD()
-            kernel32.VirtualProtect.argtypes = [ctypes.c_void_p, ctypes.c_size_t, wintypes.DWORD,
-                                                ctypes.POINTER(wintypes.DWORD)]
-            if kernel32.VirtualProtect(name, 16, 0x04, ctypes.byref(old)):  # PAGE_READWRITE
-                ctypes.memmove(name + 13, b"2", 1)
-                kernel32.VirtualProtect(name, 16, old.value, ctypes.byref(old))
-            return
-
-
-def _own_temp():
-    """The TEMP folder scripts/windows-bpy.sh made for this run (wine sets TEMP from its registry,
-    over the environment it is given). Blender names its session folder there blender_<letter><pid>,
-    26 names per process id, and wine gives each process one of the same few ids: the folders that
-    quick exits (os._exit) leave would soon take all 26, in a TEMP shared by every run."""
-    import os
-    temp = os.environ.get("NDFBAKE_WINE_TEMP")
-    if temp:
-        os.environ["TEMP"] = os.environ["TMP"] = temp
-
-
-try:
-    _hide_map_view_of_file3()
-    _own_temp()
-except Exception as e:  # never stop Python from starting
-    import sys
-    print("sitecustomize (wine fixes):", e, file=sys.stderr)
-PYTHON
-}
 
 # --- what is missing -------------------------------------------------------------------------
 need_wine=0; need_python=0; need_site=0; need_prefix=0; need_series=()
@@ -95,13 +26,11 @@ need_wine=0; need_python=0; need_site=0; need_prefix=0; need_series=()
 aedebug_values=$(grep -A3 -F '[Software\\Microsoft\\Windows NT\\CurrentVersion\\AeDebug]' \
                  "$cache/prefix/system.reg" 2>/dev/null || true)
 { grep -qx '"Debugger"=""' <<<"$aedebug_values" && grep -qx '"Auto"="1"' <<<"$aedebug_values"; } || need_prefix=1
-need_site_fix=0
-cmp -s "$cache/wine-site/sitecustomize.py" <(sitecustomize) || need_site_fix=1
 for s in "${series[@]}"; do
   [ -f "$cache/bpy-$s/bpy/__init__.pyd" ] || need_series+=("$s")
 done
 if [ $need_wine = 0 ] && [ $need_python = 0 ] && [ $need_site = 0 ] && [ $need_prefix = 0 ] &&
-   [ $need_site_fix = 0 ] && [ ${#need_series[@]} = 0 ]; then
+   [ ${#need_series[@]} = 0 ]; then
   say "wine, Windows Python, numpy and bpy ${series[*]} present in $cache"
   exit 0
 fi
@@ -161,13 +90,6 @@ if [ $need_site = 1 ]; then
   unzip -q "$tmp"/wheels/numpy-*.whl -d "$tmp/site-packages"
   rm -rf "$cache/site-packages"
   mv "$tmp/site-packages" "$cache/site-packages"
-fi
-
-# --- the wine workarounds ------------------------------------------------------------------------
-if [ $need_site_fix = 1 ]; then
-  say "wine workarounds into $cache/wine-site"
-  mkdir -p "$cache/wine-site"
-  sitecustomize >"$cache/wine-site/sitecustomize.py"
 fi
 
 # --- bpy, one folder per series ----------------------------------------------------------------
