@@ -147,8 +147,8 @@ export PYTHONNOUSERSITE=1
 export PYTHONIOENCODING=utf-8
 
 # A TEMP folder of this run's own, C:\ndfbake-temp\run.*, deleted after it: Blender's session
-# folders in a TEMP that every run shares would soon take all the names it tries (sitecustomize.py
-# of install-windows-runtime.sh sets TEMP from NDFBAKE_WINE_TEMP: wine sets TEMP itself).
+# folders in a TEMP that every run shares would soon take all the names it tries (the
+# sitecustomize.py above sets TEMP from NDFBAKE_WINE_TEMP: wine sets TEMP itself).
 mkdir -p "$WINEPREFIX/drive_c/ndfbake-temp"
 run_temp=$(mktemp -d "$WINEPREFIX/drive_c/ndfbake-temp/run.XXXXXX")
 trap 'rm -rf "$run_temp"' EXIT
