@@ -24,6 +24,12 @@ Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/te
 - Materials named as Windows devices ("CON", "nul.001") get folders Windows can make.
 - Lobe images' paths are written with '/' on every system; paths saved with '\\' (a .blend from
   Windows) still name their folder and the normal map's file on every system.
+- A .blend, a material and a normal map with non-ASCII names and folders ("Zoë Projekte/材質
+  scene.blend", "材質 Zoë"): the operator bakes, the lobe images load from where their paths say,
+  a re-bake and reopening the file find them, and Revert restores the material.
+- "Metal" and "metal" in one .blend get folders whose names differ in more than case (one folder
+  on Windows and macOS), whichever is baked first, and keep their own files through re-bakes and a
+  Revert of the other.
 """
 import os
 import re
@@ -402,6 +408,106 @@ def test_delete_unused_folders_deletes_only_what_this_file_does_not_use():
         _images_load(bpy.data.materials["Bumpy"])
 
 
+def _operator_bake(name):
+    h.expect(bpy.ops.ndfbake.bake(material=name) == {"FINISHED"}, "the bake of %s did not finish" % name)
+
+
+def _images_have_pixels(material):
+    """The bake's lobe images: each file is where bpy.path.abspath(filepath) says and Blender
+    decodes it (has_data, pixels). Returns the lobe folder (absolute)."""
+    from ndfbake import material_scan
+    rec = material_scan.record(material)
+    h.expect(rec and rec["images"], "%s has no bake record" % material.name)
+    folder = os.path.normpath(bpy.path.abspath(rec["folder"]))
+    for name in rec["images"]:
+        image = bpy.data.images[name]
+        path = os.path.normpath(bpy.path.abspath(image.filepath))
+        h.expect(os.path.isfile(path) and os.path.dirname(path) == folder,
+                 "image %s: %s is not a file in %s (%s)" % (name, path, folder, h.listing(os.path.dirname(folder))))
+        image.reload()
+        h.expect(len(image.pixels) > 0 and image.has_data and image.size[0] > 0,
+                 "image %s (%s) does not load" % (name, image.filepath))
+    return folder
+
+
+def test_non_ascii_folder_and_material_names():
+    """A .blend in 'Zoë Projekte/' named '材質 scene.blend', its material '材質 Zoë', its normal map
+    under 'Texturen ü/法線 karte.png': bake, re-bake, reopen and Revert through the operators."""
+    import hashlib
+    from ndfbake import material_scan
+    name = "材質 Zoë"
+    with h.scratch_dir() as scratch:
+        directory = os.path.join(scratch, "Zoë Projekte")
+        textures = os.path.join(directory, "Texturen ü")
+        os.makedirs(textures)
+        h.reset_scene()
+        png = h.write_normal_map(os.path.join(textures, "法線 karte.png"), "bumps", 64)
+        material = h.normal_mapped_material(name, png)
+        h.plane_with(material)
+        blend = os.path.join(directory, "材質 scene.blend")
+        bpy.ops.wm.save_as_mainfile(filepath=blend)
+        lobes = material.ndfbake_settings.max_lobes
+        material.ndfbake_settings.max_lobes = lobes  # stored now, as after the re-bake's change
+        before = h.dump_material(material)
+
+        _operator_bake(name)
+        expected = "_Zo_~%s.ndfbake" % hashlib.sha1(name.encode("utf-8")).hexdigest()[:8]
+        rec = material_scan.record(material)
+        h.expect(rec["folder"] == "//" + expected, "the bake went to %s, not //%s" % (rec["folder"], expected))
+        folder = _images_have_pixels(material)
+        h.expect(folder == os.path.join(directory, expected) and _level0_lobes(folder) == lobes,
+                 "lobe files in %s: %s" % (folder, h.listing(directory)))
+
+        material.ndfbake_settings.max_lobes = 2
+        _operator_bake(name)
+        second = _images_have_pixels(material)
+        h.expect(second != folder and _level0_lobes(second) == 2, "the re-bake's files: %s" % h.listing(directory))
+        h.expect(_level0_lobes(folder) == 4, "the re-bake changed the first bake's files")
+
+        bpy.ops.wm.save_mainfile()
+        bpy.ops.wm.open_mainfile(filepath=blend)
+        material = bpy.data.materials[name]
+        h.expect(_images_have_pixels(material) == second, "reopened, the file's bake is not in %s" % second)
+
+        h.expect(bpy.ops.ndfbake.revert(material=name) == {"FINISHED"}, "Revert did not finish")
+        material.ndfbake_settings.max_lobes = lobes
+        after = h.dump_material(material)
+        h.expect(after == before, "the material differs after Revert: %s" % h.differences(before, after))
+
+
+def test_names_that_differ_in_case_get_folders_of_their_own():
+    """Windows and macOS see 'Metal.ndfbake' and 'metal.ndfbake' as one folder: two materials whose
+    names differ only in case must not share it, whichever is baked first."""
+    from ndfbake import material_scan
+    for order in (("Metal", "metal"), ("metal", "Metal")):
+        with h.scratch_dir() as directory:
+            h.reset_scene()
+            png = h.write_normal_map(os.path.join(directory, "normal.png"), "bumps", 64)
+            for k, name in enumerate(order):
+                h.plane_with(h.normal_mapped_material(name, png), "Plane %d" % k)
+            bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "scene.blend"))
+            folders = {}
+            for name in order + order:  # bake, then re-bake each
+                material = bpy.data.materials[name]
+                material.ndfbake_settings.max_lobes = 2
+                _operator_bake(name)
+                folders.setdefault(name, []).append(material_scan.record(material)["folder"])
+                _images_have_pixels(material)
+            every = folders[order[0]] + folders[order[1]]
+            print("  %s: folders %s" % (" then ".join(order), every))
+            h.expect(len({f.casefold() for f in every}) == 4, "folders that differ only in case: %s" % every)
+            on_disk = [n for n in os.listdir(directory) if n.endswith(".ndfbake")]
+            h.expect(len({n.casefold() for n in on_disk}) == len(on_disk) == 4, "on disk: %s" % on_disk)
+            kept = {name: _lobe_files(bpy.path.abspath(folders[name][-1])) for name in order}
+            h.expect(bpy.ops.ndfbake.revert(material=order[0]) == {"FINISHED"}, "Revert did not finish")
+            bpy.ops.wm.save_mainfile()
+            h.close_file()
+            other = bpy.data.materials[order[1]]
+            h.expect(_lobe_files(bpy.path.abspath(folders[order[1]][-1])) == kept[order[1]],
+                     "%s lost files when %s was reverted" % (order[1], order[0]))
+            _images_have_pixels(other)
+
+
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_names_that_clash_on_disk_get_folders_of_their_own,
@@ -417,4 +523,6 @@ if __name__ == "__main__":
            test_folders_other_blend_files_use_are_kept,
            test_undo_after_a_save_finds_the_files,
            test_delete_unused_folders_keeps_what_ctrl_z_brings_back,
-           test_delete_unused_folders_deletes_only_what_this_file_does_not_use])
+           test_delete_unused_folders_deletes_only_what_this_file_does_not_use,
+           test_non_ascii_folder_and_material_names,
+           test_names_that_differ_in_case_get_folders_of_their_own])

@@ -6,7 +6,10 @@ The scene is test_addon_bake.py's (test_addon_helpers.baked_scene). A material c
 bake runs is not baked; renamed nodes are found again (a renamed group node keeps its role key
 from a new one); a deleted Principled BSDF is made again on Revert; a re-bake that no longer finds
 one of two normal-map chains reverts that one and re-bakes the other, also where the user renamed
-that one's group node; a deleted group node beside a renamed one is baked again.
+that one's group node; a deleted group node beside a renamed one is baked again. A re-bake while
+another program holds one of the previous bake's files open either succeeds (Linux replaces open
+files) or fails cleanly, naming the file and changing no file and no node; once it is closed, the
+re-bake succeeds.
 """
 import os
 import sys
@@ -202,10 +205,73 @@ def test_a_deleted_group_node_beside_a_renamed_one_is_baked_again():
                  % h.differences(before, h.dump_material(material)))
 
 
+def _file_bytes(directory):
+    """Every file under `directory`: its path relative to it and its bytes."""
+    files = {}
+    for root, _, names in os.walk(directory):
+        for name in names:
+            path = os.path.join(root, name)
+            with open(path, "rb") as f:
+                files[os.path.relpath(path, directory)] = f.read()
+    return files
+
+
+def test_a_rebake_while_a_lobe_file_is_open_elsewhere():
+    """One of the previous bake's .exr files held open as another program would (on Windows,
+    Python's open() shares it without FILE_SHARE_DELETE: it cannot be replaced or deleted) during
+    the operator's re-bake: it succeeds, or it is cancelled with an error that names the file and
+    leaves every file byte for byte and the material's nodes as they were, with no temporary files.
+    Closed again, the re-bake succeeds."""
+    from ndfbake import lobe_folders, material_scan
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory)
+        material.ndfbake_settings.max_lobes = 2
+        h.expect(bpy.ops.ndfbake.bake(material="Bumpy") == {"FINISHED"}, "the first bake did not finish")
+        first = lobe_folders.record_folder(material_scan.record(material))
+        held = os.path.join(first, sorted(n for n in os.listdir(first) if n.endswith(".exr"))[0])
+        files = _file_bytes(directory)
+        material.ndfbake_settings.max_lobes = 1
+        before = h.dump_material(material)
+        with open(held, "rb"):
+            try:
+                outcome = bpy.ops.ndfbake.bake(material="Bumpy")
+                error = None
+            except RuntimeError as e:  # the operator's ERROR report, in a script
+                outcome, error = {"CANCELLED"}, str(e)
+        print("  re-bake with %s open: %s %s" % (os.path.basename(held), outcome, error or ""))
+        if outcome == {"FINISHED"}:
+            rec = material_scan.record(material)
+            h.expect(rec["lobes"] == 1, "the re-bake's record: %s lobes" % rec["lobes"])
+            second = lobe_folders.record_folder(rec)
+            h.expect(os.path.normcase(second) != os.path.normcase(first), "the re-bake wrote into %s" % first)
+            h.expect({k: v for k, v in _file_bytes(directory).items() if k in files} == files,
+                     "the re-bake changed the previous bake's files")
+            left = [n for n in os.listdir(second) if not lobe_folders.is_bake_file(n)]
+            h.expect(not left, "files left in %s: %s" % (second, left))
+        else:
+            h.expect(outcome == {"CANCELLED"} and error, "the re-bake returned %s" % outcome)
+            h.expect(os.path.basename(held) in error, "the error names no held file: %s" % error)
+            h.expect(_file_bytes(directory) == files, "files changed: %s" % h.listing(directory))
+            after = h.dump_material(material)
+            h.expect(after == before, "the material changed: %s" % h.differences(before, after))
+        h.expect(not [n for n in os.listdir(directory) if n.endswith(lobe_folders.PENDING_SUFFIX)],
+                 "pending folders left: %s" % os.listdir(directory))
+
+        material.ndfbake_settings.max_lobes = 3
+        h.expect(bpy.ops.ndfbake.bake(material="Bumpy") == {"FINISHED"}, "the re-bake after closing the file")
+        rec = material_scan.record(material)
+        h.expect(rec["lobes"] == 3, "the last re-bake's record: %s lobes" % rec["lobes"])
+        for name in rec["images"]:
+            image = bpy.data.images[name]
+            image.reload()
+            h.expect(len(image.pixels) > 0, "image %s (%s) does not load" % (name, image.filepath))
+
+
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_a_material_changed_during_the_bake_is_not_baked, test_renamed_nodes_are_found_again,
            test_a_deleted_principled_is_made_again,
            test_a_rebake_without_one_of_two_normal_maps_reverts_that_one,
            test_a_rebake_without_a_renamed_one_of_two_normal_maps,
-           test_a_deleted_group_node_beside_a_renamed_one_is_baked_again])
+           test_a_deleted_group_node_beside_a_renamed_one_is_baked_again,
+           test_a_rebake_while_a_lobe_file_is_open_elsewhere])
