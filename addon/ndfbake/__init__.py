@@ -1,9 +1,10 @@
 """ndfbake: normal maps that stay right at every distance (Han et al. 2007 vMF lobes).
 
-From Blender 4.2 on, install the extension zip the build leaves in its folder,
-ndfbake-<version>-linux_x64.zip (Get Extensions > Install from Disk; blender_manifest.toml says what
-it is); in Blender 3.4, ndfbake-<version>.zip (Preferences > Add-ons > Install; bl_info below), or
-put this folder into a scripts path's addons/. The native library (libndfbake.so) lives beside
+From Blender 4.2 on, install the extension zip for your platform that the build leaves in its
+folder, ndfbake-<version>-<platform>.zip (Get Extensions > Install from Disk; blender_manifest.toml
+says what it is); in Blender 3.4, ndfbake-<version>.zip (Preferences > Add-ons > Install; bl_info
+below), or put this folder into a scripts path's addons/. The native library (ndfbake.dll,
+libndfbake.dylib or libndfbake.so: native.LIBRARY_NAME) lives beside
 this file; see native.py for where else it is looked for. Registering never fails
 for want of the library: the panel then shows why it cannot be used.
 
