@@ -89,9 +89,10 @@ typedef enum ndfb_representation {
 } ndfb_representation;
 
 /* Progress: fraction in [0, 1] and a stage name: "decode", "fit" (the lobe alignment included),
- * "measure" (the report's error statistics), "write". Called on the thread that called the
- * library. Return non-zero to cancel: the call then returns NDFB_ERROR_CANCELLED and leaves no
- * output behind. */
+ * "measure" (the report's error statistics), "write". Every stage a call goes through is reported
+ * at least once, however fast it runs (more often while it runs long). Called on the thread that
+ * called the library. Return non-zero to cancel: the call then returns NDFB_ERROR_CANCELLED and
+ * leaves no output behind. */
 typedef int (*ndfb_progress_fn)(void* user, const char* stage, float fraction);
 
 typedef struct ndfb_context_s* ndfb_context;

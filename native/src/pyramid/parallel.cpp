@@ -52,6 +52,11 @@ void parallel_rows(int rows, int threads, const std::function<void(int)>& body, 
         if (--workers_running == 0) finished.notify_all();
     };
 
+    // Every loop with a tick reports 0 before any row and 1 after the last, whatever the timing:
+    // a stage that finishes within the first interval is still seen (a progress bar, the
+    // add-on's stage label), and each of these calls may cancel like the throttled ones.
+    if (tick && !tick(0.0)) throw Error(Status::cancelled, "cancelled");
+
     std::vector<std::jthread> pool;
     const int pool_size = workers_running;
     pool.reserve(size_t(pool_size));
@@ -60,8 +65,10 @@ void parallel_rows(int rows, int threads, const std::function<void(int)>& body, 
     bool cancelled = false;
     {
         std::unique_lock lock(mutex);
-        while (workers_running > 0) {
-            finished.wait_for(lock, kProgressInterval);
+        auto next_tick = std::chrono::steady_clock::now() + kProgressInterval;
+        for (;;) {
+            if (finished.wait_until(lock, next_tick, [&] { return workers_running == 0; })) break;
+            next_tick = std::chrono::steady_clock::now() + kProgressInterval;
             if (!tick || cancelled) continue;
             lock.unlock();
             const bool keep_going = tick(rows > 0 ? double(rows_done.load()) / rows : 1.0);
@@ -75,6 +82,7 @@ void parallel_rows(int rows, int threads, const std::function<void(int)>& body, 
     pool.clear();  // joins
     if (failure) std::rethrow_exception(failure);
     if (cancelled) throw Error(Status::cancelled, "cancelled");
+    if (tick && !tick(1.0)) throw Error(Status::cancelled, "cancelled");
 }
 
 }  // namespace ndfbake
