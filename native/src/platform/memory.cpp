@@ -1,13 +1,7 @@
 #include "platform/memory.h"
 
 #if defined(_WIN32)
-#ifndef WIN32_LEAN_AND_MEAN
-#define WIN32_LEAN_AND_MEAN
-#endif
-#ifndef NOMINMAX
-#define NOMINMAX
-#endif
-#include <windows.h>
+#include "platform/windows_api.h"
 // After windows.h. K32GetProcessMemoryInfo is KERNEL32's own export (Windows 7 and later):
 // the library depends on KERNEL32 and the C runtime only, so not on psapi.dll.
 #include <psapi.h>
