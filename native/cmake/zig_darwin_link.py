@@ -66,7 +66,7 @@ def main():
     # Its inputs and options, minus what ld64.lld is told here or would reject.
     link = []
     skip = 0
-    for i, arg in enumerate(zig_args):
+    for arg in zig_args:
         if skip:
             skip -= 1
             continue

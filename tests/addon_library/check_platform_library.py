@@ -12,7 +12,6 @@
 Prints what it read and PASS, or every FAIL.
 """
 import argparse
-import os
 import re
 import subprocess
 import sys
@@ -49,7 +48,7 @@ def version_tuple(text):
     return tuple(int(x) for x in text.split("."))
 
 
-def check_windows(library, api, arch):
+def check_windows(library):
     headers = tool("llvm-objdump", "-p", library)
     imports = set(re.findall(r"DLL Name: (\S+)", headers))
     print("imports:", " ".join(sorted(imports)))
@@ -65,7 +64,7 @@ def check_windows(library, api, arch):
     return exports
 
 
-def check_macos(library, api, arch, macos):
+def check_macos(library, arch, macos):
     exports = {name[1:] for name in tool("llvm-nm", "-gU", "--format=just-symbols", library).split()}
     used = tool("llvm-objdump", "--macho", "--dylibs-used", library).splitlines()[1:]
     used = [line.strip().split(" (")[0] for line in used]
@@ -93,7 +92,7 @@ def check_macos(library, api, arch, macos):
     return exports
 
 
-def check_linux(library, api, arch, glibc):
+def check_linux(library, arch, glibc):
     header = tool("llvm-readelf", "-h", library)
     machine = re.search(r"Machine:\s+(.*)", header).group(1)
     if ELF_MACHINES[arch] not in machine.lower().replace("_", "-"):
@@ -152,11 +151,11 @@ def main():
 
     api = api_functions(args.header)
     if system == "windows":
-        exports = check_windows(library, api, arch)
+        exports = check_windows(library)
     elif system == "macos":
-        exports = check_macos(library, api, arch, args.macos)
+        exports = check_macos(library, arch, args.macos)
     else:
-        exports = check_linux(library, api, arch, args.glibc)
+        exports = check_linux(library, arch, args.glibc)
     print("exports: %d symbols, the header declares %d functions" % (len(exports), len(api)))
     for name in sorted(exports - api):
         fail("%s exports %s, which is not in ndfbake.h" % (library_file, name))
