@@ -160,7 +160,7 @@ def script_arguments(parser):
     return parser.parse_args(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])
 
 
-def _world(scene, name):
+def studio_world(scene, name):
     world = bpy.data.worlds.new(name.capitalize())
     enable_nodes(world)
     tree = world.node_tree
@@ -249,7 +249,7 @@ def build_scene(directory, width=320, height=180, map_size=MAP_SIZE, world=DEFAU
     camera.data.lens = CAMERA_LENS
     camera.data.clip_end = 500.0
     scene.camera = camera
-    _world(scene, world)
+    studio_world(scene, world)
 
     scene.render.resolution_x, scene.render.resolution_y = int(width), int(height)
     scene.render.resolution_percentage = 100

@@ -4,7 +4,8 @@
 # Debian 13's Blender 4.3 in a chroot (scripts/install-debian13-blender.sh) and Blender 5.2 and 5.3
 # as the bpy module there (scripts/install-bpy-debian13.sh; NDFBAKE_DEBIAN13_BPY_SERIES), wine with a
 # Windows CPython and the Windows bpy of 4.2 and 5.0 (scripts/install-windows-runtime.sh;
-# NDFBAKE_WINDOWS_BPY_SERIES), Debian 11 with Python in
+# NDFBAKE_WINDOWS_BPY_SERIES), the receding-surface benchmark's real normal maps out of Debian's
+# game packages (scripts/install-normal-maps.sh), Debian 11 with Python in
 # another (scripts/install-debian11-runtime.sh), and the add-on library's toolchain
 # (scripts/install-addon-toolchain.sh). Run as root.
 set -euo pipefail
@@ -44,6 +45,8 @@ bash "$(dirname "$0")/install-bpy-debian13.sh" ${NDFBAKE_DEBIAN13_BPY_SERIES-5.2
   echo "WARNING: install-bpy-debian13.sh failed: the Blender tests of the bpy series it missed are skipped" >&2
 bash "$(dirname "$0")/install-windows-runtime.sh" ${NDFBAKE_WINDOWS_BPY_SERIES-4.2 5.0} ||
   echo "WARNING: install-windows-runtime.sh failed: the Windows Blender tests of the series it missed are skipped" >&2
+bash "$(dirname "$0")/install-normal-maps.sh" ||
+  echo "WARNING: install-normal-maps.sh failed: the receding-surface test will fail for want of its map" >&2
 bash "$(dirname "$0")/install-debian11-runtime.sh" ||
   echo "WARNING: install-debian11-runtime.sh failed: the add-on library's Debian 11 test is disabled" >&2
 # zig and the Debian sources that build the add-on's library for glibc 2.28. Without them the build
