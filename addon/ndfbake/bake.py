@@ -15,7 +15,7 @@ This module owns steps 1 and 3, whole bakes (bake_material, bake_materials) and 
 commit_pending, discard_pending: no bpy there); revert() and the removal of a bake's nodes and
 images are bake_revert.py. May call: bake_job, bake_revert and the Blender-data and plain layers
 below (group_node, nodes, osl_group, lod_nodes, node_builders, scene_lod, lobe_folders,
-material_scan, image_pixels, native, id_names); never operators or ui.
+material_scan, image_pixels, native, id_names, transparent_shadow); never operators or ui.
 
 Files (choices the design leaves open):
 - The lobe textures go into a new folder beside the .blend named after the material,
@@ -57,7 +57,7 @@ from dataclasses import dataclass, field
 import bpy
 
 from . import (bake_job, bake_revert, group_node, id_names, image_pixels, lobe_folders, lod_nodes, material_scan,
-               native, node_builders, nodes, osl_group, scene_lod)
+               native, node_builders, nodes, osl_group, scene_lod, transparent_shadow)
 from .bake_job import BakeError  # bake.BakeError: what every caller catches
 
 RECORD_KEY = material_scan.RECORD_KEY
@@ -429,6 +429,9 @@ def finish(job):
                      "refine": job.settings.refine, "roughness": job.roughness, "level_of_detail": "SCENE" if job.lod else "RENDERER",
                      "cycles_lobes": job.settings.cycles_lobes, "shader": job.settings.shader},
     }
+    shadow = transparent_shadow.settle(material, old)
+    if shadow is not None:
+        rec[transparent_shadow.RECORD_FIELD] = shadow
     material[RECORD_KEY] = json.dumps(rec)
     return BakeResult(material=material.name, folder=job.folder, lobes=len(images), seconds=job.seconds,
                       report=report, summary=summary)

@@ -3,15 +3,16 @@ finish() also uses (a re-bake's previous nodes, or its own on an error). Main th
 
 Revert leads the group node's links back to the Principled BSDF(s), writes the user's edits on
 the group node back (group_node.remove_group_node), removes the group node, its node groups, the
-OSL text and the lobe images, and deletes the bake record; the lobe files stay for Ctrl-Z (when
-they go: lobe_folders.py). bake.revert is this module's revert().
+OSL text and the lobe images, puts back the material's Transparent Shadows (transparent_shadow.py)
+and deletes the bake record; the lobe files stay for Ctrl-Z (when they go: lobe_folders.py).
+bake.revert is this module's revert().
 
-May call: group_node, nodes, osl_group, node_builders, material_scan, lobe_folders, bake_job
-(BakeError). Called by: bake.
+May call: group_node, nodes, osl_group, node_builders, material_scan, lobe_folders,
+transparent_shadow, bake_job (BakeError). Called by: bake.
 """
 import bpy
 
-from . import group_node, lobe_folders, material_scan, node_builders, nodes, osl_group
+from . import group_node, lobe_folders, material_scan, node_builders, nodes, osl_group, transparent_shadow
 from .bake_job import BakeError
 
 
@@ -52,5 +53,6 @@ def revert(material):
     remove_nodes(material, rec)
     osl_group.remove_unused_text()
     remove_images(rec.get("images", []))
+    transparent_shadow.restore(material, rec)
     del material[material_scan.RECORD_KEY]
     return folder, [m.name for m in lobe_folders.folder_users(folder)] if folder else []
