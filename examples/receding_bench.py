@@ -41,7 +41,6 @@ import time
 sys.dont_write_bytecode = True  # no __pycache__ in examples/ or addon/
 
 import bpy  # noqa: E402
-import numpy as np  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 if HERE not in sys.path:
@@ -117,6 +116,7 @@ def build(map_path, material, width, height):
         sun.rotation_euler = rotation
         scene.collection.objects.link(sun)
     black = bpy.data.worlds.new("Black")
+    black.use_fake_user = True   # unused while the courtyard lights the saved file
     demo_build.enable_nodes(black)
     black.node_tree.nodes["Background"].inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
     demo_build.studio_world(scene, "courtyard")
@@ -146,13 +146,15 @@ def light_scene(scene, light):
 def plane_mask(scene):
     """Pixels (rows bottom first) whose 2x2 rays all hit the plane, eroded by one pixel."""
     names, hit, _ = demo_render.pixel_hits(scene, scene.render.resolution_x, scene.render.resolution_y)
-    return image_error.erode((hit == names.index("Plane")).all(axis=-1), 1) if "Plane" in names else None
+    if "Plane" not in names:
+        raise RuntimeError("the camera sees no plane")
+    return image_error.erode((hit == names.index("Plane")).all(axis=-1), 1)
 
 
 # ---- rendering ------------------------------------------------------------------------------------
 
 def references(scene, material, directory, reference_samples):
-    """(EEVEE's and Cycles' references, the Cycles reference's own block-error noise per mask call)."""
+    """(EEVEE's reference, Cycles' reference, the two halves Cycles' is the mean of)."""
     engine = demo_build.eevee_engine()
     previous = demo_render.set_normal_interpolation([material], "Closest")
     try:
