@@ -160,6 +160,19 @@ def reference_taa_samples(factor, per_pixel=1024):
     return max(16, int(math.ceil(per_pixel / float(factor * factor))))
 
 
+def render_eevee_reference(scene, materials, path, factor, samples):
+    """EEVEE's reference: the scene at factor x factor the resolution with the materials' normal
+    maps point-sampled (Closest: no MIP-mapping), box-downsampled; the big render at `path` is
+    deleted again."""
+    previous = set_normal_interpolation(materials, "Closest")
+    try:
+        big = render(scene, eevee_engine(), path, samples, percentage=100 * factor)
+    finally:
+        set_normal_interpolation(materials, previous)
+    os.remove(path)
+    return image_error.box_downsample(big, factor)
+
+
 def render_plain(scene, directory, materials, reference_samples=256, samples=16, eevee_samples=64,
                  eevee_reference_samples=None, log=print):
     """The renders of the unbaked scene: {name: pixels}, and their timings and settings in `info`."""
@@ -177,14 +190,9 @@ def render_plain(scene, directory, materials, reference_samples=256, samples=16,
                                         eevee_samples))
     factor = supersampling_factor(scene.render.resolution_x)
     eevee_reference_samples = eevee_reference_samples or reference_taa_samples(factor)
-    previous = set_normal_interpolation(materials, "Closest")
-    try:
-        big_path = os.path.join(directory, "eevee_reference_%dx.exr" % factor)
-        timed("eevee_reference", lambda: image_error.box_downsample(
-            render(scene, eevee_engine(), big_path, eevee_reference_samples, percentage=100 * factor), factor))
-    finally:
-        set_normal_interpolation(materials, previous)
-    os.remove(big_path)  # the downsampled one is kept (written below)
+    timed("eevee_reference", lambda: render_eevee_reference(
+        scene, materials, os.path.join(directory, "eevee_reference_%dx.exr" % factor), factor,
+        eevee_reference_samples))  # the downsampled one is kept (written below)
     save_pixels(images["eevee_reference"], os.path.join(directory, "eevee_reference.exr"), scene)
     info["eevee_reference"] = {"factor": factor, "taa_samples": eevee_reference_samples,
                                "interpolation": "Closest"}

@@ -155,16 +155,8 @@ def plane_mask(scene):
 
 def references(scene, material, directory, reference_samples):
     """(EEVEE's reference, Cycles' reference, the two halves Cycles' is the mean of)."""
-    engine = demo_build.eevee_engine()
-    previous = demo_render.set_normal_interpolation([material], "Closest")
-    try:
-        big = demo_render.render(scene, engine, os.path.join(directory, "eevee_big.exr"),
-                                 demo_render.reference_taa_samples(REFERENCE_FACTOR),
-                                 percentage=100 * REFERENCE_FACTOR)
-    finally:
-        demo_render.set_normal_interpolation([material], previous)
-    os.remove(os.path.join(directory, "eevee_big.exr"))
-    eevee = image_error.box_downsample(big, REFERENCE_FACTOR)
+    eevee = demo_render.render_eevee_reference(scene, [material], os.path.join(directory, "eevee_big.exr"),
+                                               REFERENCE_FACTOR, demo_render.reference_taa_samples(REFERENCE_FACTOR))
     half = max(1, reference_samples // 2)
     a = demo_render.render(scene, "CYCLES", os.path.join(directory, "cycles_a.exr"), half, seed=1)
     b = demo_render.render(scene, "CYCLES", os.path.join(directory, "cycles_b.exr"), half, seed=2)
