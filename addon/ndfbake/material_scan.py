@@ -103,12 +103,19 @@ def live_link(socket):
 def input_may_matter(node, name):
     """Whether input `name` of a node (a Principled BSDF, or the group node holding its inputs since
     a bake) may change what renders: live-linked, animated or non-zero. False where it has none."""
+    return node.inputs.find(name) >= 0 and constant_input(node, name) != 0.0
+
+
+def constant_input(node, name):
+    """The value of input `name` of a node (as input_may_matter's) where nothing changes it while
+    rendering: no live link, no animation. None where something may, or where it has no such input."""
     index = node.inputs.find(name)
     if index < 0:
-        return False
+        return None
     socket = node.inputs[index]
-    return (live_link(socket) is not None or socket.default_value != 0.0
-            or node_animation.input_animated(node.id_data, node, index))
+    if live_link(socket) is not None or node_animation.input_animated(node.id_data, node, index):
+        return None
+    return socket.default_value
 
 
 def _trace(socket):

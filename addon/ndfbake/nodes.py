@@ -71,6 +71,15 @@ SPECULAR_LOBE_INPUTS = {specular_split.CONDUCTOR: _SHARED_LOBE_INPUTS | {"Base C
                         specular_split.DIELECTRIC: _SHARED_LOBE_INPUTS | {"IOR", "Specular IOR Level"}}
 # What the base sets itself rather than take from the group.
 BASE_SET_INPUTS = {"Base Color", "Metallic", "Specular IOR Level", "Alpha"}
+# Principled inputs at the value that leaves a closure out of EEVEE's shader (Metallic 1: the
+# diffuse, subsurface and refraction; coat, sheen, subsurface, transmission 0; Alpha 1: the
+# transparency). EEVEE (Legacy and Next) reads the value only of an unlinked socket and compiles
+# every closure a linked one may turn on, so a whole-copy lobe linked to the group's inputs cost
+# what a plain Principled with all of them on costs: in 3.4's EEVEE Legacy the metal demo at 4
+# lobes took 2.2x a plain frame, 1.6-1.8x with these unlinked, the image the same to the bit
+# (docs/speed.md, "EEVEE Legacy"). Cycles folds such constants itself.
+CLOSURE_OFF_VALUES = {"Metallic": 1.0, "Alpha": 1.0} | {
+    blender_compat.principled_input(name): 0.0 for name in ("Clearcoat", "Sheen", "Subsurface", "Transmission")}
 
 
 def osl_status(scene=None):
@@ -103,6 +112,16 @@ def carried_inputs(principled, current=None):
             continue
         carried.append(socket)
     return carried
+
+
+def closure_off_inputs(holder):
+    """{input name: value} of the CLOSURE_OFF_VALUES that `holder` (the Principled, or the group
+    node of the bake a re-bake replaces) holds at that value with nothing to change it (no live
+    link, no animation): a whole-copy lobe takes these as constants, not from the group's inputs.
+    Like the specular split (specular_split.lobe_kind), read when the group is built: a coat or a
+    transmission set on the group node after the bake shows once the material is baked again."""
+    return {name: value for name, value in CLOSURE_OFF_VALUES.items()
+            if material_scan.constant_input(holder, name) == value}
 
 
 def held_input(socket, current, name):
@@ -164,6 +183,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     holder = principled if current is None else current
     # Specular-only lobes over one base (specular_split), or whole copies (kind None).
     kind = specular_split.lobe_kind(holder) if specular_split.may_split(principled, holder) else None
+    constants = closure_off_inputs(holder) if kind is None else {}
 
     # The outputs whose lobe BSDFs the group builds: (y offset of a lobe's BSDF, y of the sum).
     layout = ({"BSDF": (0, -200)} if cycles_lobes is not None else {}) | {EEVEE_BSDF: (-450, -500)}
@@ -214,7 +234,8 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
                 roughness = _grazing_roughness(tree, gin, dec, nm, names, "Grazing %d %s" % (j, output),
                                                narrowing, (-300, y + dy - 150))
             shaders[output].append(_lobe_bsdf(tree, gin, principled, carried, roughness, nm,
-                                              "Lobe %d %s" % (j, output), (0, y + dy), multiscatter, kind))
+                                              "Lobe %d %s" % (j, output), (0, y + dy), multiscatter, kind,
+                                              constants))
 
     x_end = 1000 + 200 * count
     emission = _emission(tree, gin, (x_end, -900))
@@ -365,9 +386,11 @@ def _emission(tree, gin, location):
     return alpha.outputs["Shader"]
 
 
-def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location, multiscatter, kind=None):
+def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location, multiscatter, kind=None,
+               constants=None):
     """Lobe j's shader: a copy of the original Principled BSDF with the lobe's normal and roughness,
-    emitting nothing (the group draws the emission once: _emission); with a specular_split kind,
+    emitting nothing (the group draws the emission once: _emission), taking `constants` (input name:
+    value, closure_off_inputs) as values rather than from the group; with a specular_split kind,
     only its specular reflection: the metal's (CONDUCTOR), the dielectric layer's over black
     (DIELECTRIC), or both mixed by Metallic (BOTH)."""
     if kind == specular_split.BOTH:
@@ -395,6 +418,9 @@ def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location
         if socket.name in COMPUTED_INPUTS or socket.name in EMISSION_INPUTS:
             continue
         if kind is not None and socket.name not in SPECULAR_LOBE_INPUTS[kind]:
+            continue
+        if constants and socket.name in constants:
+            bsdf.inputs[socket.identifier].default_value = constants[socket.name]
             continue
         tree.links.new(gin.outputs[socket.name], bsdf.inputs[socket.identifier])
     if kind == specular_split.CONDUCTOR:

@@ -33,7 +33,7 @@ dielectric).
 """
 import bpy
 
-from . import lod_nodes, material_scan, node_animation
+from . import lod_nodes, material_scan
 from . import specular_albedo_table as table
 from .node_builders import COLOR, FLOAT, GROUP_VERSION, VECTOR, _find_group, _group_with_io, _link, _math, _vmath
 
@@ -69,13 +69,11 @@ def lobe_kind(holder):
     """What a lobe's specular is: CONDUCTOR where Metallic is a constant 1 (no link, no animation;
     the base would draw nothing and is left out), DIELECTRIC where it is a constant 0, else BOTH
     (mixed by Metallic, as the Principled BSDF mixes them)."""
-    index = holder.inputs.find("Metallic")
-    socket = holder.inputs[index]
-    if material_scan.live_link(socket) is None and not node_animation.input_animated(holder.id_data, holder, index):
-        if socket.default_value == 1.0:
-            return CONDUCTOR
-        if socket.default_value == 0.0:
-            return DIELECTRIC
+    metallic = material_scan.constant_input(holder, "Metallic")
+    if metallic == 1.0:
+        return CONDUCTOR
+    if metallic == 0.0:
+        return DIELECTRIC
     return BOTH
 
 

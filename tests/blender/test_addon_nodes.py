@@ -12,7 +12,8 @@ lobe_nodes.py:  α'² = min(α² + 1.5/κ, 1), α = roughness², κ = (3R − R�
 lowered by the half-float resolution 4e-4 (io/lobe_exr.h) and kept ≥ 0. (brdf.h's amplitude is not
 part of the shading: see lobe_nodes.py.)
 
-The lobe BSDFs keep GGX, rather than Multiscatter GGX, where the material transmits (structure).
+The lobe BSDFs keep GGX, rather than Multiscatter GGX, where the material transmits, and take the
+inputs that leave a closure off as constants where the material holds them there (structure).
 """
 import os
 import sys
@@ -278,7 +279,79 @@ def test_lobes_keep_ggx_where_the_material_transmits():
             bake.revert(material)
 
 
+def _whole_copy_lobes(material):
+    """The group's whole-copy lobe Principled BSDFs (no specular-split base or layer)."""
+    group = next(n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeGroup" and n.get("ndfbake"))
+    from ndfbake import nodes
+    return [n for n in group.node_tree.nodes
+            if n.bl_idname == "ShaderNodeBsdfPrincipled" and not n.name.startswith(nodes.BASE_BSDF)]
+
+
+def test_whole_copy_lobes_leave_closures_off_as_constants():
+    """A whole-copy lobe (Principled v1, or v2 with a coat) takes Metallic 1, Alpha 1 and a coat,
+    sheen, subsurface or transmission of 0 as constants where the material holds them there with
+    nothing to change them, and from the group's inputs where they are linked, animated or another
+    value: EEVEE compiles the closures a linked socket may turn on (nodes.CLOSURE_OFF_VALUES).
+    Checked against the material's own sockets, case by case, not against the add-on's table."""
+    from ndfbake import bake, blender_compat
+    coat = blender_compat.principled_input("Clearcoat")
+    sheen = blender_compat.principled_input("Sheen")
+    v2 = bpy.app.version >= (4, 0, 0)
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory)
+        tree = material.node_tree
+        principled = tree.nodes["Principled BSDF"]
+        value = tree.nodes.new("ShaderNodeValue")
+        value.outputs[0].default_value = 1.0
+
+        def set_up(metallic=1.0, alpha=1.0, sheen_weight=0.0, link=None, keyframe=None):
+            for link_ in [l for l in tree.links if l.from_node == value]:
+                tree.links.remove(link_)
+            if tree.animation_data is not None:
+                tree.animation_data_clear()
+            principled.inputs["Metallic"].default_value = metallic
+            principled.inputs["Alpha"].default_value = alpha
+            principled.inputs[sheen].default_value = sheen_weight
+            # Principled v2 splits lobes unless a layer may matter: a linked coat keeps whole copies.
+            principled.inputs[coat].default_value = 0.0
+            if v2:
+                tree.links.new(value.outputs[0], principled.inputs[coat])
+            if link:
+                tree.links.new(value.outputs[0], principled.inputs[link])
+            if keyframe:
+                principled.inputs[keyframe].keyframe_insert("default_value", frame=1)
+
+        # (case, set-up, {input: constant the lobes hold, or None where they take the group's input})
+        cases = [("metal", {}, {"Metallic": 1.0, "Alpha": 1.0, sheen: 0.0}),
+                 ("dielectric", {"metallic": 0.0}, {"Metallic": None, "Alpha": 1.0, sheen: 0.0}),
+                 ("Metallic linked", {"link": "Metallic"}, {"Metallic": None}),
+                 ("Metallic animated", {"keyframe": "Metallic"}, {"Metallic": None, "Alpha": 1.0}),
+                 ("Alpha 0.5", {"alpha": 0.5}, {"Alpha": None, "Metallic": 1.0}),
+                 ("sheen 0.4", {"sheen_weight": 0.4}, {sheen: None}),
+                 ("sheen animated", {"keyframe": sheen}, {sheen: None})]
+        if not v2:
+            cases.append(("Clearcoat 0", {}, {coat: 0.0}))
+        else:
+            cases.append(("Coat Weight linked", {}, {coat: None}))
+        for name, setup, expected in cases:
+            set_up(**setup)
+            bake.bake_material(material, bake.BakeSettings(max_lobes=2, level_of_detail="RENDERER"))
+            lobes = _whole_copy_lobes(material)
+            h.expect(len(lobes) >= 2, "%s: %d whole-copy lobe BSDFs" % (name, len(lobes)))
+            for socket_name, constant in expected.items():
+                sockets = [lobe.inputs[socket_name] for lobe in lobes]
+                if constant is None:
+                    ok = all(s.is_linked for s in sockets)
+                else:
+                    ok = all(not s.is_linked and s.default_value == constant for s in sockets)
+                print("  %s: %s %s" % (name, socket_name, "from the group" if constant is None else constant))
+                h.expect(ok, "%s: the lobes' %s is %s, expected %s" % (
+                    name, socket_name, [s.default_value if not s.is_linked else "linked" for s in sockets],
+                    "linked to the group" if constant is None else constant))
+            bake.revert(material)
+
+
 if __name__ == "__main__":
     h.import_addon()
     h.run([test_decode_group_matches_the_rule_in_both_engines, test_grazing_group_matches_its_formula_in_both_engines,
-           test_lobes_keep_ggx_where_the_material_transmits])
+           test_lobes_keep_ggx_where_the_material_transmits, test_whole_copy_lobes_leave_closures_off_as_constants])
