@@ -34,6 +34,8 @@ if "bpy" in locals():
                     nodes, group_node, osl_group, lobe_folders, bake_job, bake_revert, bake, operators, ui):  # noqa: F821
         importlib.reload(_module)
 
+import atexit  # noqa: E402
+
 import bpy  # noqa: E402
 
 from . import (bake, bake_job, bake_revert, blender_compat, group_node, id_names, image_pixels,  # noqa: E402,F401
@@ -46,9 +48,21 @@ def register():
     for cls in ui.classes + operators.classes:
         bpy.utils.register_class(cls)
     bpy.types.Material.ndfbake_settings = bpy.props.PointerProperty(type=ui.NDFBakeSettings)
+    if not bpy.app.binary_path:  # the bpy module: see _unregister_at_exit
+        atexit.register(_unregister_at_exit)
+
+
+def _unregister_at_exit():
+    """The bpy module's exit does not turn add-ons off as Blender's does (addon_utils.disable_all),
+    and a class still registered keeps bpy alive past Python's finalization, where PyPI's 4.5
+    hangs and 4.2 crashes (lobe_folders.exit_session): a script that registered the add-on and
+    never unregistered it would not end. The unsaved folders go first, as at any exit."""
+    lobe_folders.exit_session()
+    unregister()
 
 
 def unregister():
+    atexit.unregister(_unregister_at_exit)
     operators.stop_running_bakes(bpy.context)
     lobe_folders.remove_handlers()  # and nothing of this session is deleted any more
     del bpy.types.Material.ndfbake_settings

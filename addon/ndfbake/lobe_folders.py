@@ -167,8 +167,11 @@ _on_disk = None
 def created(folder):
     """A folder this session's bake wrote: deleted when the file is closed unless a save used it.
     Only a background Blender keeps the books: with a window, recovery files may need any folder
-    (module docstring), so none is ever deleted by itself."""
+    (module docstring), so none is ever deleted by itself. A script that bakes through bake.py
+    without registering the add-on gets the handlers that keep them here, at its first bake."""
     if bpy.app.background:
+        if not handlers_installed():
+            install_handlers()
         _created[_key(folder)] = os.path.normpath(folder)
 
 
@@ -320,36 +323,45 @@ def _on_load_post(*_):
         _on_disk = None
 
 
-def _on_exit():
+def exit_session():
+    """At exit: the session's unsaved folders go, as at any close of the file, and so do the
+    handlers. A function in bpy.app.handlers keeps this module, and through it bpy, alive past
+    Python's finalization, which the bpy module (PyPI's 4.2 and 4.5) cannot survive: 4.5 then
+    hangs in its own exit (its sound thread's condition variable destroyed while waited on), 4.2
+    crashes."""
     _close_session()
+    _remove_handler_functions()
 
 
 _HANDLERS = (("save_post", _on_save_post), ("load_pre", _on_load_pre), ("load_post", _on_load_post))
 
 
-def _remove_our_handlers():
+def _remove_handler_functions():
     """This module's handlers, also those of an earlier load of it (a reloaded add-on)."""
     for name, handler in _HANDLERS:
         handlers = getattr(bpy.app.handlers, name)
         for old in [h for h in handlers if getattr(h, "__module__", None) == __name__
                     and h.__name__ == handler.__name__]:
             handlers.remove(old)
-    atexit.unregister(_on_exit)
+
+
+def handlers_installed():
+    return _on_save_post in bpy.app.handlers.save_post
 
 
 def install_handlers():
-    """Called when the add-on is imported or registered: from then on every save and the closing
-    of the file (load, exit) keep the books. A reloaded module replaces its earlier handlers."""
-    _remove_our_handlers()
+    """Called when the add-on is registered, or at a background session's first bake (created):
+    from then on every save and the closing of the file (load, exit) keep the books. Importing
+    installs nothing. A reloaded module replaces its earlier handlers."""
+    _remove_handler_functions()
+    atexit.unregister(exit_session)
     for name, handler in _HANDLERS:
         getattr(bpy.app.handlers, name).append(handler)
-    atexit.register(_on_exit)
+    atexit.register(exit_session)
 
 
 def remove_handlers():
     """For the add-on's unregister(): the handlers go and this session's folders are kept."""
-    _remove_our_handlers()
+    _remove_handler_functions()
+    atexit.unregister(exit_session)
     forget_session()
-
-
-install_handlers()
