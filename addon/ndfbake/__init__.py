@@ -43,26 +43,36 @@ from . import (bake, bake_job, bake_revert, blender_compat, group_node, id_names
                operators, osl_group, scene_lod, specular_albedo_table, specular_split, ui)
 
 
+_registered = False
+
+
 def register():
+    global _registered
     lobe_folders.install_handlers()
     for cls in ui.classes + operators.classes:
         bpy.utils.register_class(cls)
     bpy.types.Material.ndfbake_settings = bpy.props.PointerProperty(type=ui.NDFBakeSettings)
+    _registered = True
     if not bpy.app.binary_path:  # the bpy module: see _unregister_at_exit
         atexit.register(_unregister_at_exit)
 
 
 def _unregister_at_exit():
-    """The bpy module's exit does not turn add-ons off as Blender's does (addon_utils.disable_all),
-    and a class still registered keeps bpy alive past Python's finalization, where PyPI's 4.5
-    hangs and 4.2 crashes (lobe_folders.exit_session): a script that registered the add-on and
-    never unregistered it would not end. The unsaved folders go first, as at any exit."""
+    """In the bpy module, a class left registered keeps bpy alive past Python's finalization,
+    where PyPI's 4.5 hangs and 4.2 crashes (lobe_folders.exit_session), and only add-ons enabled
+    through addon_utils are turned off at its exit, after this: a script that called register()
+    itself would not end. The unsaved folders go first, as at any exit."""
     lobe_folders.exit_session()
     unregister()
 
 
 def unregister():
+    """Also after _unregister_at_exit, when the bpy module's exit turns the add-on off again."""
+    global _registered
     atexit.unregister(_unregister_at_exit)
+    if not _registered:
+        return
+    _registered = False
     operators.stop_running_bakes(bpy.context)
     lobe_folders.remove_handlers()  # and nothing of this session is deleted any more
     del bpy.types.Material.ndfbake_settings

@@ -24,6 +24,7 @@ specular lobes over one diffuse at the mean normal, which those layers do not fo
 The Script node reads its files by absolute path (OSL takes no '//' paths): moving the .blend and
 its lobe folder elsewhere needs a re-bake for Cycles (EEVEE's images stay relative).
 """
+import functools
 import glob
 import os
 import sys
@@ -82,8 +83,10 @@ def _compiler_ready():
     return not needs_oslquery or _oslquery_path()
 
 
+@functools.cache
 def build_status():
-    """(available, why not): whether this Blender build can compile and run the OSL variant."""
+    """(available, why not): whether this Blender build can compile and run the OSL variant. Asked
+    once a session (the panel asks at every redraw): the build does not change while it runs."""
     if not getattr(bpy.app.build_options, "cycles_osl", False):
         return False, "this Blender build has no OSL (bpy.app.build_options.cycles_osl is False)"
     if not _compiler_ready():
