@@ -77,8 +77,8 @@ BASE_SET_INPUTS = {"Base Color", "Metallic", "Specular IOR Level", "Alpha"}
 # every closure a linked one may turn on, so a whole-copy lobe linked to the group's inputs cost
 # what a plain Principled with all of them on costs: in 3.4's EEVEE Legacy the metal demo at 4
 # lobes took 2.2x a plain frame, 1.6-1.8x with these unlinked, the image the same to the bit
-# (docs/speed.md, "EEVEE Legacy"). Cycles folds such constants itself.
-# Principled v1's names and v2's (4.0+) side by side: a Principled has one of each.
+# (docs/speed.md, "EEVEE Legacy"). Cycles folds such constants itself. Principled v1's names and
+# v2's (4.0+) side by side: a Principled has one of each.
 CLOSURE_OFF_VALUES = {"Metallic": 1.0, "Alpha": 1.0, "Clearcoat": 0.0, "Coat Weight": 0.0, "Sheen": 0.0,
                       "Sheen Weight": 0.0, "Subsurface": 0.0, "Subsurface Weight": 0.0, "Transmission": 0.0,
                       "Transmission Weight": 0.0}
