@@ -229,6 +229,16 @@ def _lobe_distributions(material):
             if n.bl_idname == "ShaderNodeBsdfPrincipled" and not n.name.startswith(nodes.BASE_BSDF)}
 
 
+def _scene_with_value_node(directory, number):
+    """h.baked_scene's material, its tree, its Principled BSDF and a new Value node (`number`) for
+    the cases to link to the Principled's inputs."""
+    material = h.baked_scene(directory)
+    tree = material.node_tree
+    value = tree.nodes.new("ShaderNodeValue")
+    value.outputs[0].default_value = number
+    return material, tree, tree.nodes["Principled BSDF"], value
+
+
 def test_lobes_keep_ggx_where_the_material_transmits():
     """The lobes use Multiscatter GGX for a GGX material, except where it transmits (Transmission
     or Transmission Roughness non-zero, linked or animated): Blender's Principled BSDF with
@@ -238,11 +248,7 @@ def test_lobes_keep_ggx_where_the_material_transmits():
     transmission_input = blender_compat.principled_input("Transmission")
     roughness_input = blender_compat.principled_input("Transmission Roughness")
     with h.scratch_dir() as directory:
-        material = h.baked_scene(directory)
-        tree = material.node_tree
-        principled = tree.nodes["Principled BSDF"]
-        value = tree.nodes.new("ShaderNodeValue")
-        value.outputs[0].default_value = 0.0
+        material, tree, principled, value = _scene_with_value_node(directory, 0.0)
 
         def set_up(transmission=0.0, transmission_roughness=0.0, link=None, muted=False, keyframe=False,
                    distribution="GGX"):
@@ -298,11 +304,7 @@ def test_whole_copy_lobes_leave_closures_off_as_constants():
     sheen = blender_compat.principled_input("Sheen")
     v2 = bpy.app.version >= (4, 0, 0)
     with h.scratch_dir() as directory:
-        material = h.baked_scene(directory)
-        tree = material.node_tree
-        principled = tree.nodes["Principled BSDF"]
-        value = tree.nodes.new("ShaderNodeValue")
-        value.outputs[0].default_value = 1.0
+        material, tree, principled, value = _scene_with_value_node(directory, 1.0)
 
         def set_up(metallic=1.0, alpha=1.0, sheen_weight=0.0, link=None, keyframe=None):
             for link_ in [l for l in tree.links if l.from_node == value]:
