@@ -43,16 +43,11 @@ from . import (bake, bake_job, bake_revert, blender_compat, group_node, id_names
                operators, osl_group, scene_lod, specular_albedo_table, specular_split, ui)
 
 
-_registered = False
-
-
 def register():
-    global _registered
     lobe_folders.install_handlers()
     for cls in ui.classes + operators.classes:
         bpy.utils.register_class(cls)
     bpy.types.Material.ndfbake_settings = bpy.props.PointerProperty(type=ui.NDFBakeSettings)
-    _registered = True
     if not bpy.app.binary_path:  # the bpy module: see _unregister_at_exit
         atexit.register(_unregister_at_exit)
 
@@ -68,11 +63,9 @@ def _unregister_at_exit():
 
 def unregister():
     """Also after _unregister_at_exit, when the bpy module's exit turns the add-on off again."""
-    global _registered
     atexit.unregister(_unregister_at_exit)
-    if not _registered:
+    if not hasattr(bpy.types.Material, "ndfbake_settings"):  # registered last by register()
         return
-    _registered = False
     operators.stop_running_bakes(bpy.context)
     lobe_folders.remove_handlers()  # and nothing of this session is deleted any more
     del bpy.types.Material.ndfbake_settings
