@@ -101,8 +101,8 @@ if __name__ == "__main__":
     if bpy.app.binary_path:
         print("SKIP test_addon_exit: Blender's binary turns add-ons off at its own exit; this is the bpy "
               "module's test")
-        h.exit_now(0)
-    h.import_addon(register=False)
-    h.run([test_importing_every_module_leaves_nothing_running,
-           test_registered_and_baked_session_ends_and_deletes_its_unsaved_folder,
-           test_unregistered_bake_ends_and_keeps_the_saved_folder])
+    else:
+        h.import_addon(register=False)
+        h.run([test_importing_every_module_leaves_nothing_running,
+               test_registered_and_baked_session_ends_and_deletes_its_unsaved_folder,
+               test_unregistered_bake_ends_and_keeps_the_saved_folder])

@@ -7,7 +7,6 @@ zip the build made.
 The add-on is imported from the source tree (addon/) and registered; test_addon_install.py checks
 the zip path instead. Not a test itself (ctest runs the files it lists).
 """
-import atexit
 import contextlib
 import faulthandler
 import os
@@ -369,15 +368,21 @@ def run(tests):
 
 
 def exit_now(status):
-    """Exits with `status` after Python's atexit functions (the add-on's among them) but without
-    the rest of the shutdown: Blender's --python-exit-code only sees uncaught exceptions. The bpy
-    module's hang (4.5) and crash (4.2) at exit were the add-on's handlers and classes keeping bpy
-    alive; test_addon_exit runs scripts that end by Python's own exit, so that comes back as a
-    failure there."""
-    atexit._run_exitfuncs()
+    """Ends the test with `status` as a script would, through Python's and Blender's own exit, so
+    that a hang or crash at exit fails the test (the bpy module's at 4.2 and 4.5 was the add-on's
+    handlers and classes keeping bpy alive; test_addon_exit names it). In the bpy module: SystemExit.
+    In Blender's binary, whose --python-exit-code only sees uncaught exceptions: a failure raises
+    one; a pass returns, and `blender -b` quits as after any script."""
     sys.stdout.flush()
     sys.stderr.flush()
-    os._exit(status)
+    if not bpy.app.binary_path:
+        sys.exit(status)
+    if status:
+        raise TestsFailed("the test ended with status %d" % status)
+
+
+class TestsFailed(Exception):
+    """Raised at the end of a script run by Blender's binary whose tests failed."""
 
 
 def cleanup(directory):
@@ -469,13 +474,21 @@ def run_bake_blend(blend, *args, timeout=120):
 
 # ---- tests in a real Blender window (under Xvfb) ---------------------------------------------------
 
-def finish_window_test(name, state, ok, message):
-    """Ends a window test: its scratch folder (state["dir"]) goes, PASS/FAIL is printed, and the
-    process exits 0 or 1 (a window has no --python-exit-code to rely on)."""
+class WindowTestFinished(Exception):
+    """Raised by finish_window_test to stop the step that called it (run_window_test's timer)."""
+
+
+def finish_window_test(name, state, ok, message, quitting=False):
+    """Ends a window test: its scratch folder (state["dir"]) goes, PASS/FAIL is printed (ctest
+    reads it: a window has no --python-exit-code, and Blender with a window exits 0 whatever a
+    script did), and Blender quits as File > Quit does (wm.quit_blender), so that a crash or hang at
+    exit fails the test too. quitting: called while Blender already quits (an atexit function)."""
     if "dir" in state:
         cleanup(state["dir"])
     print(("PASS " if ok else "FAIL ") + name + ": " + message, flush=True)
-    os._exit(0 if ok else 1)
+    if not quitting:
+        bpy.ops.wm.quit_blender()
+        raise WindowTestFinished(name)
 
 
 def run_window_test(name, state, step):
@@ -494,6 +507,8 @@ def run_window_test(name, state, step):
             if time.time() > state["deadline"]:
                 finish_window_test(name, state, False, "timed out in step %s" % state["step"])
             return step()
+        except WindowTestFinished:
+            return None
         except Exception:
             traceback.print_exc()
             finish_window_test(name, state, False, "exception")

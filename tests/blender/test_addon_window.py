@@ -26,7 +26,7 @@ Steps, driven by bpy.app.timers from Blender's own event loop:
    itself). Checked by an atexit function that runs after the add-on's.
 The worker is held at its first "fit" progress call until the main thread has seen what it
 checks (a gate in BakeJob.run), so the test does not race the fit on a loaded machine.
-The process exits 0 when every check holds, 1 otherwise (printed).
+It prints PASS when every check holds, FAIL otherwise, and Blender quits normally either way.
 """
 import atexit
 import faulthandler
@@ -65,8 +65,8 @@ def _install_gate():
     bake_job.BakeJob.run = gated_run
 
 
-def _finish(ok, message):
-    h.finish_window_test("test_addon_window", state, ok, message)
+def _finish(ok, message, quitting=False):
+    h.finish_window_test("test_addon_window", state, ok, message, quitting)
 
 
 def _properties_area():
@@ -299,7 +299,7 @@ def _after_quit():
     print("quit without saving: quit.blend written, both lobe folders kept" if not failures
           else "quit without saving: " + "; ".join(failures), flush=True)
     _finish(not failures, "modal bake, screenshot, Esc cancel, undo, Bake All and quit work (%d UI ticks)"
-            % state["ticks"])
+            % state["ticks"], quitting=True)
 
 
 atexit.register(_after_quit)
