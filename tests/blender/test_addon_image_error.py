@@ -56,7 +56,7 @@ REGIONS = ("ground_far", "spheres_far")   # where filtering matters; "all", "gro
 # against the 512-spp reference alone, whose own noise counted in both errors), both with the
 # lobes narrowed at grazing views (lobe_nodes.grazing_roughness_group; 2026-11-26, with EEVEE's
 # first narrowing and Cycles' widened lobes: 0.442 / 0.447 and 0.323 / 0.294, and for Cycles
-# 0.34 / 0.38 over three seeds, examples/cycles_noise_study.py). The scene needs 8 lobes: with 4, EEVEE's far ground measured
+# 0.34 / 0.38 over three seeds, studies/cycles_noise_study.py). The scene needs 8 lobes: with 4, EEVEE's far ground measured
 # 0.80. Under the sunset world Cycles misses (0.88 / 1.23: its low sun backlights the far spheres,
 # whose naive error is then the world's sampling noise; docs/rendering.md "Image error").
 # EEVEE Next (4.2 and later) is measured against the Cycles reference, the ground truth of
@@ -68,7 +68,7 @@ REGIONS = ("ground_far", "spheres_far")   # where filtering matters; "all", "gro
 # add-on: its film weighs each sample by 1 / (4 + luma * exposure^2), so at this scene's exposure
 # of -1.5 it darkens pixels whose samples differ, one lobe picked a sample most; and at exposure 0,
 # where it averages, it renders rough metal 6-15% darker than Cycles; docs/rendering.md, "EEVEE
-# Next's reference", examples/eevee_far_spheres.py), so the spheres are held to a regression
+# Next's reference", studies/eevee_far_spheres.py), so the spheres are held to a regression
 # bound (EEVEE_NEXT_REGRESSION_BOUNDS) and the far ground to the issue's 0.5. Cycles in 5.0 meets it
 # (0.146 / 0.037; against the 512-spp reference alone 0.272 / 0.046 and EEVEE Next 0.25 / 0.70).
 EEVEE_NEXT = bpy.app.version >= (4, 2, 0)
@@ -90,7 +90,7 @@ CONVERGED_SAMPLES = 128                   # Cycles Lobes compared where noise no
 # (4096): far ground 0.7553-0.7571 in Blender 5.0 and 5.3 (seeds 1 and 2) against 0.7442-0.7977 at
 # 512.
 # Issue 24's goal is the far ground's converged brightness within 10% of the reference's under 6 of
-# Blender's 8 studio worlds (examples/world_sweep.py; docs/rendering.md, "Grazing views"); under
+# Blender's 8 studio worlds (studies/world_sweep.py; docs/rendering.md, "Grazing views"); under
 # this world it measured 0.919 against the 4096-spp reference (Blender 5.0 and 5.3, 2026-11-29;
 # Widened 1.58), so it is held to a margin over that. Blender 3.4: 1.39 before the narrowing had
 # its own constant.

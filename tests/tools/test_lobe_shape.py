@@ -1,4 +1,4 @@
-"""tools/lobe_shape.py's pieces against what they must give where the answer is known:
+"""studies/lobe_shape.py's pieces against what they must give where the answer is known:
 
 - a flat map: the library fits one lobe of κ → ∞ (decoded from the lobe texture as the add-on
   decodes it), so the exact vMF and the GGX closures, widened and narrowed, reflect what the map
@@ -16,7 +16,7 @@ import sys
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(ROOT, "tools"))
+sys.path.insert(0, os.path.join(ROOT, "studies"))
 
 import lobe_shape as tool  # noqa: E402
 from grazing.ggx import sample_vmf, strat2  # noqa: E402

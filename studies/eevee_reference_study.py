@@ -2,8 +2,8 @@
 spheres, their mean luminance in each render that bears on it (docs/rendering.md, "EEVEE Next's
 reference").
 
-    python examples/eevee_reference_study.py -- --out DIR [--world interior] [--width 128 --height 72]
-    blender -b --factory-startup --python examples/eevee_reference_study.py -- --out DIR ...
+    python studies/eevee_reference_study.py -- --out DIR [--world interior] [--width 128 --height 72]
+    blender -b --factory-startup --python studies/eevee_reference_study.py -- --out DIR ...
 
 Renders, all of the demo scene as examples/demo_scene.py builds it:
 - Cycles, 512 spp: the bumpy maps (the reference of ../shared/DESIGN.md) and the maps flattened
@@ -27,7 +27,7 @@ import sys
 import bpy
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "examples"))  # the demo
 import demo_build  # noqa: E402
 import demo_render  # noqa: E402
 import demo_scene  # noqa: E402
@@ -80,7 +80,7 @@ def set_normal_strength(material_names, strength):
 
 
 def main():
-    parser = argparse.ArgumentParser(prog="examples/eevee_reference_study.py --")
+    parser = argparse.ArgumentParser(prog="studies/eevee_reference_study.py --")
     parser.add_argument("--out", required=True)
     demo_build.add_world_option(parser)
     parser.add_argument("--width", type=int, default=128)

@@ -3,8 +3,8 @@ lobes render the far spheres closer to the Cycles reference (EEVEE Next picks on
 closures of a kind a sample, which its film's luma weighting darkens) and the far ground much
 farther from it (docs/rendering.md, "EEVEE Next's reference").
 
-    python examples/eevee_lobe_count.py -- --out DIR [--lobes 1 2 8] [--world interior]
-    blender -b --factory-startup --python examples/eevee_lobe_count.py -- --out DIR ...
+    python studies/eevee_lobe_count.py -- --out DIR [--lobes 1 2 8] [--world interior]
+    blender -b --factory-startup --python studies/eevee_lobe_count.py -- --out DIR ...
 
 The scene is examples/demo_build.py's at 128x72; the reference is Cycles at 512 spp, EEVEE renders
 64 samples; the figure is the block error of tests/blender/test_addon_image_error.py over naive's.
@@ -15,7 +15,7 @@ import sys
 
 import bpy
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "examples"))  # the demo
 import demo_build  # noqa: E402
 import demo_render  # noqa: E402
 import demo_scene  # noqa: E402
@@ -27,7 +27,7 @@ REGIONS = ("ground_far", "spheres_far")
 
 
 def main():
-    parser = argparse.ArgumentParser(prog="examples/eevee_lobe_count.py --")
+    parser = argparse.ArgumentParser(prog="studies/eevee_lobe_count.py --")
     parser.add_argument("--out", required=True)
     parser.add_argument("--lobes", type=int, nargs="+", default=[1, 2, 8])
     demo_build.add_world_option(parser)

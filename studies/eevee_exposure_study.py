@@ -3,11 +3,11 @@ far spheres (mean luminance of the EXR, which no view setting should change), na
 at several exposures, with the world's sun extracted (Blender's default) and not
 (docs/rendering.md, "Open problems"). The cause is EEVEE Next's film: it weights each sample of the
 Combined pass by 1 / (4 + luma * s) with s = exposure squared (Blender's pow2f), so 0 averages and
-any other exposure, above or below, darkens sparkly pixels (examples/eevee_far_spheres.py shows
+any other exposure, above or below, darkens sparkly pixels (studies/eevee_far_spheres.py shows
 the symmetry about 0).
 
-    python examples/eevee_exposure_study.py -- --out DIR [--world interior] [--samples 64]
-    blender -b --factory-startup --python examples/eevee_exposure_study.py -- --out DIR ...
+    python studies/eevee_exposure_study.py -- --out DIR [--world interior] [--samples 64]
+    blender -b --factory-startup --python studies/eevee_exposure_study.py -- --out DIR ...
 
 Every render is of the same scene (examples/demo_build.py at 128x72) with the same samples; only
 `view_settings.exposure` and, in the last rows, `World.sun_threshold` change. Cycles' reference
@@ -19,7 +19,7 @@ import sys
 
 import bpy
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "examples"))  # the demo
 import demo_build  # noqa: E402
 import demo_render  # noqa: E402
 import demo_scene  # noqa: E402
@@ -30,7 +30,7 @@ CYCLES_SAMPLES = 512
 
 
 def main():
-    parser = argparse.ArgumentParser(prog="examples/eevee_exposure_study.py --")
+    parser = argparse.ArgumentParser(prog="studies/eevee_exposure_study.py --")
     parser.add_argument("--out", required=True)
     demo_build.add_world_option(parser)
     parser.add_argument("--samples", type=int, default=64)

@@ -1,8 +1,8 @@
 """Where a baked material's Cycles frame time goes: the demo scene's dielectric bake (4 lobes)
 rendered with parts of its groups changed, measured in one run.
 
-    python examples/cycles_cost_parts.py -- --out DIR [--rounds R] [--lobes N]   (the bpy module)
-    blender -b --factory-startup --python examples/cycles_cost_parts.py -- --out DIR ...
+    python studies/cycles_cost_parts.py -- --out DIR [--rounds R] [--lobes N]   (the bpy module)
+    blender -b --factory-startup --python studies/cycles_cost_parts.py -- --out DIR ...
 
 A diagnostic: only the times mean something. Variants (every material's group, same scene,
 320x180, 16 samples):
@@ -30,7 +30,7 @@ import time
 
 import bpy
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "examples"))  # the demo
 import demo_build  # noqa: E402
 import demo_render  # noqa: E402
 import demo_scene  # noqa: E402
@@ -230,7 +230,7 @@ def measure(out, rounds, lobes, log=print):
 
 
 def _arguments():
-    parser = argparse.ArgumentParser(prog="examples/cycles_cost_parts.py", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(prog="studies/cycles_cost_parts.py", description=__doc__.split("\n")[0])
     parser.add_argument("--out", required=True, help="output folder")
     parser.add_argument("--rounds", type=int, default=4)
     parser.add_argument("--lobes", type=int, default=4)

@@ -2,7 +2,7 @@
 converged render, bias of that render against the reference, under a chosen world and lobe choice.
 docs/rendering.md ("Open problems": image error in Cycles under a low sun) quotes its figures.
 
-    blender -b --factory-startup --python-exit-code 1 --python examples/cycles_noise_study.py -- \
+    blender -b --factory-startup --python-exit-code 1 --python studies/cycles_noise_study.py -- \
         --out DIR [--world NAME] [--sun-lamp] [--reference-samples 512] [--converged-samples 256] \
         [--variants widened,narrowed,narrowed-ggx] [--max-lobes N] [--width 128 --height 72] \
         [--library PATH]
@@ -37,7 +37,7 @@ import bpy
 import mathutils
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "examples"))  # the demo
 import demo_scene  # noqa: E402
 import demo_build  # noqa: E402
 import demo_render  # noqa: E402

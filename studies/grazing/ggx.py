@@ -1,7 +1,7 @@
 """GGX and vMF math of the grazing study: Smith Λ, frames, visible-normal sampling, the sampled
 reflection kernel, the single-scatter albedo table, Cycles' ensure_valid_specular_reflection
 (bend), vMF sampling, and ggx_eval (the BSDF at point lights). Owns WIDENING (ndfbake's
-kGgxVmfWidening). Calls numpy only; the base layer of tools/grazing/."""
+kGgxVmfWidening). Calls numpy only; the base layer of studies/grazing/."""
 import numpy as np
 
 WIDENING = 1.5                 # native/src/math/brdf.h kGgxVmfWidening

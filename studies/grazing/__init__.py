@@ -50,7 +50,7 @@ log²(closure/map), plus the far-ground aggregate's log² per world (objective()
 far ground per world and view angle, the white furnace (flat map) at 0-88°, a finiteness sweep of
 the formula, and single vMF lobes over θv 0-88°, κ 2-1e4, α 0.02-0.5, tilts up to 45°.
 
-Run: python3 tools/grazing_fit.py --out DIR   (a few minutes on 2 cores)
+Run: python3 studies/grazing_fit.py --out DIR   (a few minutes on 2 cores)
 
 The package (issue 26: one idea per module), lowest layer first; a module may call only the ones
 listed above it:
@@ -61,5 +61,5 @@ listed above it:
   texels      the far ground's texels (bump lattice, rings), view angles and sun azimuths
   fit         the far-ground references, the objective, and the checks (furnace, finite, lobes)
   report      main: the fit, the tables, report.md / fit.json / lobes.json
-This file owns only this description and imports nothing; tools/grazing_fit.py is the command.
+This file owns only this description and imports nothing; studies/grazing_fit.py is the command.
 """

@@ -1,18 +1,18 @@
 """What a texel's lobes reflect against what its fine normals reflect, light direction by light
 direction (docs/rendering.md, "The lobes' shape under a sun"):
 
-    python3 tools/lobe_shape.py [--library build/native/libndfbake.so]
+    python3 studies/lobe_shape.py [--library build/native/libndfbake.so]
 
 A texel of a normal map is fitted by the library (ndfb_fit with its defaults, at most 8 lobes; 4
 for the cosine bumps) and these are evaluated for one view at every light direction of the upper
-hemisphere (2° × 3° grid), as the tools/grazing study models them (Multiscatter GGX, F = 1,
+hemisphere (2° × 3° grid), as the studies/grazing study models them (Multiscatter GGX, F = 1,
 Cycles' normal bending, no masking between fine normals):
 - map: the texel's fine normals, each shading with its own GGX of the material's roughness;
 - vMF: the fitted lobes exactly, fine normals drawn from each vMF (what the fit stands for);
 - GGX W: one GGX closure per lobe with α'² = α² + W/κ (W = 1.5 is the add-on's, brdf.h
   kGgxVmfWidening; 1.0 and 0.75 narrower), not narrowed: what EEVEE Next draws;
 - Cycles: the same with W = 1.5, narrowed toward grazing views with Cycles' C = 4
-  (grazing.correction.corrected_alpha2, nodes.GRAZING_NARROWING): what Cycles draws;
+  (grazing.correction.corrected_alpha2, nodes.default_grazing_narrowing): what Cycles draws;
 - Beckmann: one Beckmann closure per lobe with m'² = α² + 2/κ (Han 2007, eq. 21), single scatter.
 Printed per texel and view: each one's reflectance (∫ f cos dω) and, split by how strongly the map
 itself reflects a light (its core: above 10% of its peak; shoulder 1-10%; tail 0.1-1%; far tail
@@ -27,7 +27,7 @@ to the surface, roughness 0.15) with fine normals drawn from it, so the lobe is 
 closure's shape differs; and a 128² map of cosine bumps, n ∝ (−0.6 cos 16πx, −0.6 cos 16πy, 1),
 roughness 0.2, at level 3 (half a period) and 7 (whole), whose normals pile up along the edges of
 a square 31° wide, fitted with the Bake panel's default 4 lobes. Calls the library through the
-add-on's ctypes module (native.py, plus the pyramid calls it does not make) and tools/grazing
+add-on's ctypes module (native.py, plus the pyramid calls it does not make) and studies/grazing
 (numpy). 15 s on a 2-core machine; its pieces are checked by tests/tools/test_lobe_shape.py."""
 import argparse
 import ctypes
@@ -49,7 +49,7 @@ from grazing.texels import kappa_of  # noqa: E402
 MAX_LOBES = 8                 # NDFB_MAX_LOBES: what the demo bakes
 ARTIST_LOBES = 4              # the Bake panel's default Maximum Lobes
 WIDENINGS = (WIDENING, 1.0, 0.75)  # the add-on's, then narrower
-CYCLES_NARROWING = 4.0        # nodes.GRAZING_NARROWING["BSDF"]: what Cycles draws by default
+CYCLES_NARROWING = 4.0        # nodes.CYCLES_GRAZING_NARROWING: what Cycles draws by default
 BUCKETS = ((0.1, np.inf, "core"), (0.01, 0.1, "shoulder"), (0.001, 0.01, "tail"), (0.0, 0.001, "far tail"))
 VIEWS = (30.0, 10.0)          # degrees above the surface
 
@@ -189,7 +189,7 @@ def cosine_bumps(size=128, periods=8, amplitude=0.6):
 
 
 def main():
-    parser = argparse.ArgumentParser(prog="tools/lobe_shape.py")
+    parser = argparse.ArgumentParser(prog="studies/lobe_shape.py")
     parser.add_argument("--library", default=os.path.join(HERE, "..", "build", "native", "libndfbake.so"))
     args = parser.parse_args()
     library = native.Library(os.path.abspath(args.library))

@@ -3,8 +3,8 @@ reference"): what the view exposure does to them, how EEVEE Next renders plain r
 against Cycles, two changes to the baked lobes that a shading cause would answer, and where on the
 spheres the light is lost.
 
-    python examples/eevee_far_spheres.py -- --out DIR [--world interior] [--extra-alpha 0.08 0.16 0.3]
-    blender -b --factory-startup --python examples/eevee_far_spheres.py -- --out DIR ...
+    python studies/eevee_far_spheres.py -- --out DIR [--world interior] [--extra-alpha 0.08 0.16 0.3]
+    blender -b --factory-startup --python studies/eevee_far_spheres.py -- --out DIR ...
 
 First, naive in EEVEE Next at view exposures 0, +0.5, -0.5 and the scene's: its film weights each
 sample by 1 / (4 + luma * exposure_scale) with exposure_scale = exposure squared (Blender's pow2f),
@@ -33,7 +33,7 @@ import sys
 
 import bpy
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "examples"))  # the demo
 import demo_build  # noqa: E402
 import demo_render  # noqa: E402
 import demo_scene  # noqa: E402
@@ -134,7 +134,7 @@ def rings(mask):
 
 
 def main():
-    parser = argparse.ArgumentParser(prog="examples/eevee_far_spheres.py --")
+    parser = argparse.ArgumentParser(prog="studies/eevee_far_spheres.py --")
     parser.add_argument("--out", required=True)
     parser.add_argument("--extra-alpha", type=float, nargs="*", default=[0.08, 0.16, 0.3])
     demo_build.add_world_option(parser)

@@ -1,10 +1,10 @@
 """The demo scene under each of Blender's studio worlds, in EEVEE and Cycles: how bright the far
 ground converges against its reference, and ndfbake's image error against naive's, per world.
 
-    python examples/world_sweep.py -- --out DIR [--worlds city,forest,...] [--width 128 --height 72]
+    python studies/world_sweep.py -- --out DIR [--worlds city,forest,...] [--width 128 --height 72]
             [--samples 16] [--eevee-samples 64] [--converged-samples 128] [--reference-band-samples 4096]
             [--variants "cycles=4,eevee=4;cycles=0,eevee=1"]
-    blender -b --factory-startup --python examples/world_sweep.py -- --out DIR ...
+    blender -b --factory-startup --python studies/world_sweep.py -- --out DIR ...
 
 For each world: builds examples/demo_scene.py's scene, renders its references and the naive map
 once (demo_render.render_plain), bakes every material with the defaults an artist gets (demo_scene's
@@ -22,7 +22,7 @@ EEVEE is measured twice: against its own supersampled render of the point-sample
 against the Cycles reference (which is EEVEE Next's figure: docs/rendering.md, "EEVEE Next's
 reference"); brightness is the far ground's mean luminance over that reference's.
 
---variants measures other grazing narrowings than the add-on's (nodes.GRAZING_NARROWING) on the
+--variants measures other grazing narrowings than the add-on's (nodes.default_grazing_narrowing) on the
 same references, one bake each: `cycles=C` narrows Cycles' lobes with constant C (0: Cycles Lobes
 Widened, no narrowing), `eevee=C` EEVEE's; this is how the constants were chosen (docs/rendering.md,
 "Grazing views").
@@ -35,7 +35,7 @@ import time
 
 import bpy
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "examples"))  # the demo
 import demo_scene  # noqa: E402
 import demo_build  # noqa: E402
 import demo_render  # noqa: E402
@@ -71,16 +71,12 @@ def _measure_variant(scene, renders, masks, images, narrowing, samples, eevee_sa
     """Bakes with the grazing constants `narrowing` ({"cycles": C, "eevee": C}; None: the add-on's),
     renders ndfbake and measures it against the plain renders in `images`."""
     from ndfbake import nodes
-    saved = dict(nodes.GRAZING_NARROWING)
     settings = {}
     if narrowing is not None:
-        nodes.GRAZING_NARROWING[nodes.EEVEE_BSDF] = narrowing["eevee"]
-        nodes.GRAZING_NARROWING["BSDF"] = narrowing["cycles"] or saved["BSDF"]
+        settings["grazing_narrowing"] = {nodes.EEVEE_BSDF: narrowing["eevee"],
+                                         "BSDF": narrowing["cycles"] or nodes.CYCLES_GRAZING_NARROWING}
         settings["cycles_lobes"] = nodes.NARROWED if narrowing["cycles"] else nodes.WIDENED
-    try:
-        bakes = demo_scene.bake_all(scene, **settings)
-    finally:
-        nodes.GRAZING_NARROWING.update(saved)
+    bakes = demo_scene.bake_all(scene, **settings)
     failed = [b for b in bakes if "summary" not in b]
     if failed:
         raise RuntimeError("bakes failed: %s" % failed)
@@ -124,7 +120,7 @@ def format_table(results):
 
 
 def main():
-    parser = argparse.ArgumentParser(prog="examples/world_sweep.py --")
+    parser = argparse.ArgumentParser(prog="studies/world_sweep.py --")
     parser.add_argument("--out", required=True)
     parser.add_argument("--worlds", default=",".join(demo_build.world_names()))
     parser.add_argument("--width", type=int, default=128)

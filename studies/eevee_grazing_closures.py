@@ -4,8 +4,8 @@ angle, under a low sun: the case where EEVEE Next loses a low sun's glare on ndf
 Principled BSDF (Multiscatter GGX, roughness 0.2) whose Normal is a constant tilted off the plane's,
 the closures weighted equally and added.
 
-    python examples/eevee_grazing_closures.py -- [--sun-elevation 8] [--view-elevation 3]
-    blender -b --factory-startup --python examples/eevee_grazing_closures.py -- ...
+    python studies/eevee_grazing_closures.py -- [--sun-elevation 8] [--view-elevation 3]
+    blender -b --factory-startup --python studies/eevee_grazing_closures.py -- ...
 
 Prints, per set of closures, the mean of a 16x16 EEVEE render (16 TAA samples) and of a Cycles
 render (64 spp) of the plane around the sun's mirror direction. Tilts are in degrees: "toward" and
@@ -20,7 +20,7 @@ import tempfile
 import bpy
 import mathutils
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "examples"))  # the demo
 import demo_build  # noqa: E402
 import demo_render  # noqa: E402
 
@@ -95,7 +95,7 @@ def closures_material(tilts):
 
 
 def main():
-    parser = argparse.ArgumentParser(prog="examples/eevee_grazing_closures.py --")
+    parser = argparse.ArgumentParser(prog="studies/eevee_grazing_closures.py --")
     parser.add_argument("--sun-elevation", type=float, default=8.0)
     parser.add_argument("--view-elevation", type=float, default=3.0)
     args = demo_build.script_arguments(parser)

@@ -2,7 +2,7 @@
 Cycles on the CPU: image error against a many-sample reference, render time, and the noise of a
 render at --samples (docs/osl.md, "On the demo scene").
 
-    python examples/osl_comparison.py -- --out DIR [--width W --height H] [--reference-samples N]
+    python studies/osl_comparison.py -- --out DIR [--width W --height H] [--reference-samples N]
                                          [--samples N] [--library PATH]
     (the bpy module; or blender -b --factory-startup --python-exit-code 1 --python ... -- ...)
 
@@ -29,9 +29,9 @@ sys.dont_write_bytecode = True
 
 import bpy  # noqa: E402
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-if HERE not in sys.path:
-    sys.path.insert(0, HERE)
+EXAMPLES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "examples")  # the demo
+if EXAMPLES not in sys.path:
+    sys.path.insert(0, EXAMPLES)
 import demo_scene  # noqa: E402
 import demo_build  # noqa: E402
 import demo_render  # noqa: E402
@@ -41,7 +41,7 @@ REGIONS = ("ground_far", "spheres_far", "all")
 
 
 def _arguments():
-    parser = argparse.ArgumentParser(prog="examples/osl_comparison.py --",
+    parser = argparse.ArgumentParser(prog="studies/osl_comparison.py --",
                                      description="The OSL variant vs the stock-node group and naive on the demo scene.")
     parser.add_argument("--out", required=True)
     parser.add_argument("--width", type=int, default=320)

@@ -1,6 +1,6 @@
 """The grazing study's run: main() parses the command line, fits one constant per family, and writes
 DIR/report.md (every table), DIR/fit.json and DIR/lobes.json. Calls every other module of
-tools/grazing/; called by tools/grazing_fit.py."""
+studies/grazing/; called by studies/grazing_fit.py."""
 import argparse
 import json
 import os

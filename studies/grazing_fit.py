@@ -1,8 +1,8 @@
 """The command of the grazing-view study (issue 24, docs/grazing-fit.md):
 
-    python3 tools/grazing_fit.py --out DIR [--quick] [--alpha A]
+    python3 studies/grazing_fit.py --out DIR [--quick] [--alpha A]
 
-Owns only the command's path; the study is the package tools/grazing/ (its __init__ has the model,
+Owns only the command's path; the study is the package studies/grazing/ (its __init__ has the model,
 equations and citations). Calls grazing.report.main."""
 import os
 import sys
