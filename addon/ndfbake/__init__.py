@@ -12,7 +12,7 @@ Modules: native (ctypes), image_pixels (the normal map as Blender decodes it), b
 differs between Blender versions), material_scan (finds the normal map), scene_lod (what the scene's
 cameras need), nodes (node groups), lobe_folders (where the textures go, and when they are
 deleted), bake (the work: bake_job its native step, bake_revert its revert), operators and ui
-(thin skins). Scripts call bake.py, or the operators bpy.ops.ndfbake.bake / bake_all / revert;
+(thin skins; panel_state keeps the panel's scans between redraws). Scripts call bake.py, or the operators bpy.ops.ndfbake.bake / bake_all / revert;
 examples/bake_blend.py is a command line.
 """
 
@@ -31,7 +31,8 @@ if "bpy" in locals():
     import importlib
     for _module in (blender_compat, id_names, native, image_pixels, node_animation, material_scan,  # noqa: F821
                     scene_lod, node_builders, specular_albedo_table, specular_split, lobe_nodes, lod_nodes,  # noqa: F821
-                    nodes, group_node, osl_group, lobe_folders, bake_job, bake_revert, bake, operators, ui):  # noqa: F821
+                    nodes, group_node, osl_group, lobe_folders, bake_job, bake_revert, bake, operators,  # noqa: F821
+                    panel_state, ui):  # noqa: F821
         importlib.reload(_module)
 
 import atexit  # noqa: E402
@@ -40,11 +41,12 @@ import bpy  # noqa: E402
 
 from . import (bake, bake_job, bake_revert, blender_compat, group_node, id_names, image_pixels,  # noqa: E402,F401
                lobe_folders, lobe_nodes, lod_nodes, material_scan, native, node_animation, node_builders, nodes,
-               operators, osl_group, scene_lod, specular_albedo_table, specular_split, ui)
+               operators, osl_group, panel_state, scene_lod, specular_albedo_table, specular_split, ui)
 
 
 def register():
     lobe_folders.install_handlers()
+    panel_state.install_handlers()
     for cls in ui.classes + operators.classes:
         bpy.utils.register_class(cls)
     bpy.types.Material.ndfbake_settings = bpy.props.PointerProperty(type=ui.NDFBakeSettings)
@@ -68,6 +70,7 @@ def unregister():
         return
     operators.stop_running_bakes(bpy.context)
     lobe_folders.remove_handlers()  # and nothing of this session is deleted any more
+    panel_state.remove_handlers()
     del bpy.types.Material.ndfbake_settings
     for cls in reversed(ui.classes + operators.classes):
         bpy.utils.unregister_class(cls)

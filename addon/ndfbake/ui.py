@@ -4,7 +4,7 @@ import textwrap
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
 
-from . import bake, blender_compat, lobe_folders, material_scan, native, nodes, operators
+from . import bake, blender_compat, lobe_folders, material_scan, native, nodes, operators, panel_state
 
 
 class NDFBakeSettings(bpy.types.PropertyGroup):
@@ -76,7 +76,7 @@ class NDFBAKE_PT_material(bpy.types.Panel):
                                                      int(job.fraction * 100)), icon="TIME")
             box.label(text="Esc cancels", icon="BLANK1")
 
-        scan = material_scan.scan(material)
+        scan = panel_state.scan(material)
         box = layout.box()
         if scan.ok:
             nm = material.node_tree.nodes[scan.targets[0].normal_map]

@@ -93,6 +93,40 @@ def import_addon(register=True):
     return ndfbake
 
 
+class FakeLayout:
+    """Enough of UILayout for Panel.draw: records the labels."""
+
+    def __init__(self, labels):
+        self.labels = labels
+        self.enabled = True
+
+    def box(self):
+        return self
+
+    def column(self, **_):
+        return self
+
+    def row(self, **_):
+        return self
+
+    def label(self, text="", icon="NONE"):
+        self.labels.append(text)
+
+    def prop(self, *args, **kwargs):
+        pass
+
+    def operator(self, *args, **kwargs):
+        pass
+
+
+def draw_panel(ui, material):
+    """The labels the add-on's material panel (`ui`, its module) draws for `material`."""
+    labels = []
+    panel = type("P", (), {"layout": FakeLayout(labels)})()
+    ui.NDFBAKE_PT_material.draw(panel, type("C", (), {"material": material, "scene": bpy.context.scene})())
+    return labels
+
+
 def temp_dir(prefix="ndfb-addon-"):
     path = tempfile.mkdtemp(prefix=prefix)
     os.chmod(path, 0o755)  # readable by the unprivileged uid the read-only test switches to

@@ -146,32 +146,6 @@ def test_installed_zip_loads_its_own_library_and_bakes():
 
 # ---- an unusable library, each in its own Blender process ------------------------------------
 
-class FakeLayout:
-    """Enough of UILayout for Panel.draw: records the labels."""
-
-    def __init__(self, labels):
-        self.labels = labels
-        self.enabled = True
-
-    def box(self):
-        return self
-
-    def column(self, **_):
-        return self
-
-    def row(self, **_):
-        return self
-
-    def label(self, text="", icon="NONE"):
-        self.labels.append(text)
-
-    def prop(self, *args, **kwargs):
-        pass
-
-    def operator(self, *args, **kwargs):
-        pass
-
-
 def _enable_installed():
     """In the child: enables the add-on installed in the folder the parent named (an extension
     repository's folder, 4.2+) or in BLENDER_USER_SCRIPTS (before)."""
@@ -204,9 +178,7 @@ def child_case(case):
     assert expected in message, message
     assert "\n" not in message
     material = bpy.data.materials.new("M")
-    labels = []
-    panel = type("P", (), {"layout": FakeLayout(labels)})()
-    module.ui.NDFBAKE_PT_material.draw(panel, type("C", (), {"material": material})())
+    labels = h.draw_panel(module.ui, material)
     assert "".join("".join(labels).split()) == "".join(message.split()), labels  # the message, wrapped
     e = h.raised(RuntimeError, lambda: bpy.ops.ndfbake.bake(material="M"), "the bake must fail without a library")
     assert "ndfbake: " + message in " ".join(str(e).split()), str(e)
