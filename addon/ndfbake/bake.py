@@ -39,7 +39,7 @@ Files (choices the design leaves open):
   says why.
   docs/rendering.md ("Level of detail") gives the measurement behind the default.
 - Cycles lobes (BakeSettings.cycles_lobes): EEVEE draws the lobes as its generation needs them
-  (nodes.GRAZING_NARROWING: narrowed at grazing views in EEVEE Legacy, widened in EEVEE Next);
+  (nodes.default_grazing_narrowing: narrowed at grazing views in EEVEE Legacy, widened in EEVEE Next);
   Cycles draws them narrowed with its own constant (NARROWED, default: the far ground's
   converged brightness within 10% of the reference under most of Blender's studio worlds) or
   widened only (WIDENED: the fewest fireflies at low sample counts under a small bright light,
@@ -50,6 +50,7 @@ Files (choices the design leaves open):
   renderer picks them by its ray differentials); EEVEE draws the stock group's lobes. osl_group.py.
 """
 import json
+import math
 import os
 import re
 from dataclasses import dataclass, field
@@ -75,6 +76,9 @@ class BakeSettings:
     level_of_detail: str = "SCENE"  # "SCENE": atlases at a level from the camera; "RENDERER": level 0
     cycles_lobes: str = nodes.NARROWED  # what Cycles draws: lobes NARROWED toward grazing views, or WIDENED only
     shader: str = "NODES"       # "NODES": the stock-node group; "OSL": Cycles' lobes through OSL (osl_group.py)
+    # C of the grazing narrowing per group output, for studies of other constants (studies/
+    # world_sweep.py); None: nodes.default_grazing_narrowing(). Not in the panel.
+    grazing_narrowing: dict = None
 
 
 @dataclass
@@ -161,6 +165,11 @@ def prepare(material, settings=None):
                                                                                   settings.cycles_lobes))
     if settings.shader not in ("NODES", "OSL"):
         raise BakeError("BAD_SETTINGS", "shader must be NODES or OSL, got %r" % settings.shader)
+    narrowing = settings.grazing_narrowing
+    if narrowing is not None and (set(narrowing) != {"BSDF", nodes.EEVEE_BSDF} or not all(
+            math.isfinite(c) and c >= 0.0 for c in narrowing.values())):
+        raise BakeError("BAD_SETTINGS", "grazing narrowing must give a finite C >= 0 for each of %s, got %r"
+                        % (sorted({"BSDF", nodes.EEVEE_BSDF}), narrowing))
     if settings.shader == "OSL":
         available, why = osl_group.status(bpy.context.scene)
         if not available:
@@ -353,7 +362,8 @@ def finish(job):
                 groups.append(osl_group.build_material_group(
                     nodes.material_group_name(material.name), tree.nodes[principled_name],
                     tree.nodes[normal_map_name], tree.nodes[texture_name], images, job.out_dir, slots, atlas,
-                    job.lod, current=current, cycles_lobes=job.settings.cycles_lobes))
+                    job.lod, current=current, cycles_lobes=job.settings.cycles_lobes,
+                    narrowing=job.settings.grazing_narrowing))
                 continue
             # Where EEVEE draws an output of its own, Cycles' lobes read the atlas with fewer lookups.
             cycles_only = group_node.eevee_draws_own_output(tree, tree.nodes[principled_name],
@@ -361,7 +371,8 @@ def finish(job):
             groups.append(nodes.build_material_group(
                 nodes.material_group_name(material.name), tree.nodes[principled_name], tree.nodes[normal_map_name],
                 tree.nodes[texture_name], images, atlas, job.lod, current=current,
-                cycles_lobes=job.settings.cycles_lobes, cycles_only=cycles_only))
+                cycles_lobes=job.settings.cycles_lobes, cycles_only=cycles_only,
+                narrowing=job.settings.grazing_narrowing))
         for (principled_name, normal_map_name, texture_name), group in zip(job.targets, groups):
             principled = tree.nodes[principled_name]
             normal_map = tree.nodes[normal_map_name]

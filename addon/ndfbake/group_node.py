@@ -202,7 +202,7 @@ def commit_replacement(material_tree, replacement):
 
 
 def add_eevee_output(material_tree, node, bypassed):
-    """EEVEE draws the group's EEVEE BSDF (its lobes, nodes.GRAZING_NARROWING) through a Material
+    """EEVEE draws the group's EEVEE BSDF (its lobes, nodes.default_grazing_narrowing) through a Material
     Output of target EEVEE, which Blender prefers to a target-All output for EEVEE and its viewport;
     Cycles goes on drawing the All output, fed by the group's BSDF. Added only where that output is
     the Principled's one destination, it is the active one, and the material has no EEVEE output

@@ -89,7 +89,7 @@ def lobe_group():
 def grazing_roughness_group():
     """A widened lobe's roughness narrowed toward grazing views: inputs Roughness (widened, α′ =
     Roughness²), Base Roughness (the original's, α), Normal (the lobe's, world space) and
-    Narrowing (C, GRAZING_NARROWING by output); output Roughness with
+    Narrowing (C, nodes.default_grazing_narrowing by output); output Roughness with
 
         α″² = max(α′² / (1 + C·α′² tan²θ), α²),   θ between the view and the lobe's normal.
 
@@ -101,7 +101,7 @@ def grazing_roughness_group():
     grows with α′ tan θ, the quantity GGX's masking grows with, and stops at the original
     roughness, so a flat map (κ → ∞, α′ = α) is left exactly as it is. C was fitted offline
     against the normal map's own response (docs/grazing-fit.md: 4 for Cycles' GGX) and measured
-    on the demo scene under the 8 studio worlds (examples/world_sweep.py; docs/rendering.md,
+    on the demo scene under the 8 studio worlds (studies/world_sweep.py; docs/rendering.md,
     "Grazing views"). The first form (C = 1, EEVEE only, 2026-11-25) was chosen on EEVEE's
     sunset ground, which widened lobes rendered 25% too dark.
     """

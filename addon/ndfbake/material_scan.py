@@ -51,9 +51,6 @@ RECORD_KEY = "ndfbake_bake"
 # bake gave its group node (unique in the tree when made). Roles: principled, normal_map, group,
 # eevee_output.
 ROLE_KEY = "ndfbake_role"
-# Colour spaces whose transform is the identity on the stored values (is_data covers the first two;
-# Linear is named so in 3.x, Linear Rec.709 from 4.0).
-DATA_COLOR_SPACES = {"Non-Color", "Raw", blender_compat.linear_color_space()}
 DEFAULT_LINKED_ROUGHNESS = 0.5
 
 
@@ -276,7 +273,10 @@ def check_image(image, node_name):
         return Problem("UNSAVED_IMAGE", "image '%s' has edits that are not saved to its file: save it (Image > "
                                         "Save) so that ndfbake bakes what you see" % name)
     colorspace = image.colorspace_settings.name
-    if not image.colorspace_settings.is_data and colorspace not in DATA_COLOR_SPACES:
+    # Colour spaces whose transform is the identity on the stored values (is_data covers the first
+    # two; Linear is named so in 3.x, Linear Rec.709 from 4.0).
+    if not image.colorspace_settings.is_data and colorspace not in {"Non-Color", "Raw",
+                                                                    blender_compat.linear_color_space()}:
         return Problem("COLOR_SPACE", "image '%s' has Color Space '%s': a normal map is data, set its Color "
                                       "Space to Non-Color (ndfbake does not guess which decoding you meant)" % (
                                           name, colorspace))

@@ -19,7 +19,7 @@ The group has two shader outputs, each with its own lobes: BSDF (Cycles, and bot
 the material's graph is the user's) and EEVEE BSDF, which EEVEE draws through a Material Output of
 target EEVEE that the bake adds beside the user's (group_node.add_eevee_output) and Revert
 removes. Each output's lobes are narrowed toward grazing views with its engine's constant
-(GRAZING_NARROWING; lobe_nodes.grazing_roughness_group) where it has one, Cycles' unless
+(default_grazing_narrowing; lobe_nodes.grazing_roughness_group) where it has one, Cycles' unless
 cycles_lobes is WIDENED. Both outputs' lobes read the same lookups, decodes and Normal Map nodes,
 except with an atlas where EEVEE never draws BSDF: then BSDF's lobes have their own, with one
 Linear lookup a level instead of EEVEE's four Closest ones (lod_nodes).
@@ -48,17 +48,32 @@ DECODE = {TAPS: "Decode %d", LINEAR: "Decode %d Linear"}
 # C of lobe_nodes.grazing_roughness_group, per group output (the engine that draws it); 0: the
 # lobes are drawn widened, not narrowed. Cycles' fitted offline against the normal map's own
 # response (docs/grazing-fit.md; brdf.h kGrazingNarrowing, which ndfbake.glsl uses too). EEVEE's
-# measured on the demo scene under Blender's 8 studio worlds (examples/world_sweep.py;
+# measured on the demo scene under Blender's 8 studio worlds (studies/world_sweep.py;
 # docs/rendering.md, "Grazing views"): EEVEE Legacy (3.x) 32, against its own supersampled render
 # of the fine normals; EEVEE Next (4.2+) none, against the Cycles reference, which it comes closer
 # to widened under every world (EEVEE Next's own supersampled render of the fine normals loses
 # what they reflect: docs/rendering.md, "EEVEE Next's reference").
-GRAZING_NARROWING = {"BSDF": 4.0, EEVEE_BSDF: 0.0 if blender_compat.eevee_next() else 32.0}
+CYCLES_GRAZING_NARROWING = 4.0
+EEVEE_LEGACY_GRAZING_NARROWING = 32.0
+
+
+def default_grazing_narrowing():
+    """C per group output in this Blender (a function: importing the add-on asks Blender nothing)."""
+    return {"BSDF": CYCLES_GRAZING_NARROWING,
+            EEVEE_BSDF: 0.0 if blender_compat.eevee_next() else EEVEE_LEGACY_GRAZING_NARROWING}
+
+
+
 # Principled inputs the lobe group computes itself rather than passing through.
 COMPUTED_INPUTS = {"Normal", "Roughness"}
-# Principled inputs the group draws once, beside the lobes, rather than in every lobe (_emission).
-EMISSION_COLOR = blender_compat.principled_input("Emission")
-EMISSION_INPUTS = {EMISSION_COLOR, "Emission Strength"}
+
+
+def emission_inputs():
+    """Principled inputs the group draws once, beside the lobes, rather than in every lobe
+    (_emission): the emission colour (blender_compat.principled_input) and strength."""
+    return {blender_compat.principled_input("Emission"), "Emission Strength"}
+
+
 EMISSION_ALPHA = "Emission Alpha"    # the group's Mix Shader that weights the emission by Alpha
 # The specular split (specular_split.py): its node, the base BSDFs and the Mix Shaders of the Alpha
 # (one of each per output: "<BASE_BSDF> BSDF", "<BASE_BSDF> EEVEE BSDF"...).
@@ -136,14 +151,14 @@ def held_input(socket, current, name):
 
 
 def build_material_group(name, principled, normal_map, image_texture, lobe_images, atlas=None, lod=None,
-                         current=None, cycles_lobes=NARROWED, cycles_only=False):
+                         current=None, cycles_lobes=NARROWED, cycles_only=False, narrowing=None):
     """A group with the carried Principled inputs (+ Normal Strength, + Vector if the original
     texture's has a live (unmuted) link, + the level-of-detail constants with an atlas) and the
     BSDF and EEVEE BSDF outputs, shading through len(lobe_images) lobes: level-0 textures that
     the renderer filters itself (atlas None), or MIP atlases (AtlasLayout) sampled at the level
     of detail the scene gives (lod: a scene_lod.LodPlan, required with an atlas). Each output's
-    lobes are narrowed toward grazing views with its constant (GRAZING_NARROWING) where it is not
-    0, BSDF's not with cycles_lobes WIDENED; with cycles_lobes None the BSDF output is left
+    lobes are narrowed toward grazing views with its constant (`narrowing`, by output, else
+    default_grazing_narrowing()) where it is not 0, BSDF's not with cycles_lobes WIDENED; with cycles_lobes None the BSDF output is left
     unlinked for the caller (osl_group draws Cycles' lobes itself). cycles_only: EEVEE draws the
     EEVEE BSDF output, never BSDF (group_node.has_eevee_output), so BSDF's lobes may read an atlas
     with one Linear lookup a level. For a re-bake, `current` is the group node of the bake it
@@ -231,10 +246,10 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         for output, (dy, _) in layout.items():
             dec, nm = lobes[reads[output]]
             roughness = dec.outputs["Roughness"]
-            narrowing = grazing_narrowing(output, cycles_lobes)
-            if narrowing:
+            constant = grazing_narrowing(output, cycles_lobes, narrowing)
+            if constant:
                 roughness = _grazing_roughness(tree, gin, dec, nm, names, "Grazing %d %s" % (j, output),
-                                               narrowing, (-300, y + dy - 150))
+                                               constant, (-300, y + dy - 150))
             shaders[output].append(_lobe_bsdf(tree, gin, principled, carried, roughness, nm,
                                               "Lobe %d %s" % (j, output), (0, y + dy), multiscatter, kind,
                                               constants))
@@ -261,10 +276,11 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     return tree
 
 
-def grazing_narrowing(output, cycles_lobes):
+def grazing_narrowing(output, cycles_lobes, narrowing=None):
     """C of the grazing narrowing that `output`'s lobes are drawn with (0: widened): its engine's
-    GRAZING_NARROWING, Cycles' (BSDF) only with cycles_lobes NARROWED."""
-    return GRAZING_NARROWING[output] if output == EEVEE_BSDF or cycles_lobes == NARROWED else 0.0
+    (`narrowing`, by output, else default_grazing_narrowing()), Cycles' (BSDF) only with cycles_lobes NARROWED."""
+    constants = default_grazing_narrowing() if narrowing is None else narrowing
+    return constants[output] if output == EEVEE_BSDF or cycles_lobes == NARROWED else 0.0
 
 
 def _grazing_roughness(tree, gin, decode, normal, names, name, narrowing, location):
@@ -344,6 +360,7 @@ def _base_bsdfs(tree, gin, principled, carried, normal_map, moments, names, outp
     split.inputs["Multiscatter"].default_value = specular_split.multiscatter(principled)
 
     bases = {}
+    skipped = COMPUTED_INPUTS | emission_inputs() | BASE_SET_INPUTS
     for k, output in enumerate(outputs):
         bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
         bsdf.name = bsdf.label = "%s %s" % (BASE_BSDF, output)
@@ -351,7 +368,7 @@ def _base_bsdfs(tree, gin, principled, carried, normal_map, moments, names, outp
         bsdf.subsurface_method = principled.subsurface_method
         bsdf.location = (location[0], location[1] + 700 * k)
         for socket in carried:
-            if socket.name in COMPUTED_INPUTS or socket.name in EMISSION_INPUTS or socket.name in BASE_SET_INPUTS:
+            if socket.name in skipped:
                 continue
             tree.links.new(gin.outputs[socket.name], bsdf.inputs[socket.identifier])
         diffuse = specular_split.EEVEE_DIFFUSE if output == EEVEE_BSDF else specular_split.CYCLES_DIFFUSE
@@ -373,12 +390,12 @@ def _emission(tree, gin, location):
     Cycles each lobe's Principled then grows its own emission branch, which costs about 32
     floats of the 255-float shader stack per lobe where Emission is linked (measured with
     Cycles' --debug-cycles summary: 134 at 4 lobes, 230 at 7; 8 overflowed, drawing the
-    material black). The Principled always has the emission colour (EMISSION_COLOR), Emission
+    material black). The Principled always has the emission colour (blender_compat's name), Emission
     Strength and Alpha, and carried_inputs always carries them."""
     node = tree.nodes.new("ShaderNodeEmission")
     node.name = node.label = "Emission"
     node.location = location
-    tree.links.new(gin.outputs[EMISSION_COLOR], node.inputs["Color"])
+    tree.links.new(gin.outputs[blender_compat.principled_input("Emission")], node.inputs["Color"])
     tree.links.new(gin.outputs["Emission Strength"], node.inputs["Strength"])
     alpha = tree.nodes.new("ShaderNodeMixShader")
     alpha.name = alpha.label = EMISSION_ALPHA
@@ -416,8 +433,9 @@ def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location
     bsdf.distribution = "MULTI_GGX" if multiscatter else principled.distribution
     bsdf.subsurface_method = principled.subsurface_method
     bsdf.location = location
+    skipped = COMPUTED_INPUTS | emission_inputs()
     for socket in carried:
-        if socket.name in COMPUTED_INPUTS or socket.name in EMISSION_INPUTS:
+        if socket.name in skipped:
             continue
         if kind is not None and socket.name not in SPECULAR_LOBE_INPUTS[kind]:
             continue
@@ -436,17 +454,14 @@ def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location
     return bsdf.outputs["BSDF"]
 
 
-# Principled v2 (Blender 4.0+) has no Transmission Roughness: transmission takes Roughness.
-TRANSMISSION_INPUTS = tuple(name for name in map(blender_compat.principled_input,
-                                                  ("Transmission", "Transmission Roughness")) if name)
-
-
 def transmits(node):
     """Whether the transmission of a Principled BSDF (or of the group node that holds its inputs
     since a bake) may matter: Transmission or Transmission Roughness linked (live), animated or
     non-zero. Read when the group is built: a transmission set on the group node after the bake
     shows once the material is baked again."""
-    return any(material_scan.input_may_matter(node, name) for name in TRANSMISSION_INPUTS)
+    # Principled v2 (Blender 4.0+) has no Transmission Roughness: transmission takes Roughness.
+    names = (blender_compat.principled_input(name) for name in ("Transmission", "Transmission Roughness"))
+    return any(material_scan.input_may_matter(node, name) for name in names if name)
 
 
 def _weighted_sum(tree, shaders, weights, y):

@@ -40,13 +40,16 @@ SCRIPT_NODE = "Lobes (OSL)"
 FRAME_NODE = "Tangent Frame"      # the live Normal Map node that makes Cycles provide the UV map's tangent
 UV_NODE = "OSL UV"
 MIP_FILE = "mip_lobe%d.exr"
-# Principled inputs the Script node takes, by the group's socket name: its parameter is the name
-# without spaces (Emission Color is blender_compat's EMISSION_COLOR).
-SCRIPT_INPUTS = ("Base Color", "Metallic", "Roughness", "IOR", "Specular IOR Level", "Specular Tint", "Anisotropic",
-                 "Anisotropic Rotation", "Tangent", "Diffuse Roughness", nodes.EMISSION_COLOR, "Emission Strength",
-                 "Alpha")
 # Principled layers the shader does not draw: a material where one may matter keeps the stock group.
 UNSUPPORTED_INPUTS = specular_split.LAYERED_INPUTS + ("Subsurface Weight", "Thin Film Thickness")
+
+
+def script_inputs():
+    """Principled inputs the Script node takes, by the group's socket name: its parameter is the
+    name without spaces (the emission colour's name is blender_compat's)."""
+    return ("Base Color", "Metallic", "Roughness", "IOR", "Specular IOR Level", "Specular Tint", "Anisotropic",
+            "Anisotropic Rotation", "Tangent", "Diffuse Roughness", blender_compat.principled_input("Emission"),
+            "Emission Strength", "Alpha")
 
 
 def _oslquery_path():
@@ -163,13 +166,13 @@ def compile_script(node):
 
 
 def build_material_group(name, principled, normal_map, image_texture, lobe_images, folder, slots, atlas=None, lod=None,
-                         current=None, cycles_lobes=nodes.NARROWED):
+                         current=None, cycles_lobes=nodes.NARROWED, narrowing=None):
     """The OSL variant of nodes.build_material_group: the same inputs and outputs; EEVEE BSDF as the
     stock group's (narrowed lobes, from `lobe_images`), BSDF from the Script node reading
     `folder`/mip_lobeJ.exr for each slot J in `slots`. Raises RuntimeError where the script does
     not compile."""
     tree = nodes.build_material_group(name, principled, normal_map, image_texture, lobe_images, atlas, lod,
-                                      current=current, cycles_lobes=None)
+                                      current=current, cycles_lobes=None, narrowing=narrowing)
     gin = next(n for n in tree.nodes if n.bl_idname == "NodeGroupInput")
     gout = next(n for n in tree.nodes if n.bl_idname == "NodeGroupOutput")
 
@@ -186,7 +189,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     inputs["SlotMask"].default_value = sum(1 << j for j in slots)
     inputs["Repeat"].default_value = 1 if image_texture.extension == "REPEAT" else 0
     inputs["UVMapName"].default_value = normal_map.uv_map
-    inputs["Narrowing"].default_value = nodes.grazing_narrowing("BSDF", cycles_lobes)
+    inputs["Narrowing"].default_value = nodes.grazing_narrowing("BSDF", cycles_lobes, narrowing)
     inputs["distribution"].default_value = "multi_ggx" if principled.distribution in ("GGX", "MULTI_GGX") else "ggx"
     inputs["Multiscatter"].default_value = specular_split.multiscatter(principled)
 
@@ -199,7 +202,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         coordinates.location = (script.location.x - 300, 1100)
         tree.links.new(coordinates.outputs["UV"], inputs["UV"])
     tree.links.new(gin.outputs["Normal Strength"], inputs["NormalStrength"])
-    for key in SCRIPT_INPUTS:
+    for key in script_inputs():
         parameter = key.replace(" ", "")
         if key in gin.outputs and parameter in inputs:
             tree.links.new(gin.outputs[key], inputs[parameter])

@@ -209,7 +209,7 @@ def _lobe_roughness_sources(tree, output):
 
 def test_cycles_lobes_narrowed_or_widened():
     """Cycles Lobes: Narrowed (the default) gives Cycles' lobes (the user's output) a grazing
-    narrowing of their own (nodes.GRAZING_NARROWING["BSDF"]) beside EEVEE's (its own output:
+    narrowing of their own (nodes.CYCLES_GRAZING_NARROWING) beside EEVEE's (its own output:
     EEVEE Legacy's narrowing, or in EEVEE Next the widened lobes); a
     re-bake with Widened gives Cycles the widened lobes only; bad values are refused."""
     from ndfbake import bake, lobe_nodes, nodes
@@ -226,13 +226,13 @@ def test_cycles_lobes_narrowed_or_widened():
                  == _principled_count(tree, nodes.EEVEE_BSDF) and not set(cycles.values()) & set(eevee.values()),
                  "Cycles' lobes %s, EEVEE's %s, %d lobes" % (cycles, eevee, result.lobes))
         for output, sources in (("BSDF", cycles), (nodes.EEVEE_BSDF, eevee)):
-            if not nodes.GRAZING_NARROWING[output]:  # EEVEE Next: its lobes are drawn widened
+            if not nodes.default_grazing_narrowing()[output]:  # EEVEE Next: its lobes are drawn widened
                 h.expect(all(source.startswith("Decode") for source in sources.values()),
                          "%s: a lobe does not take the decoded (widened) roughness: %s" % (output, sources))
                 continue
             narrowing = {tree.nodes[source].inputs["Narrowing"].default_value for source in sources.values()}
             h.expect(all(tree.nodes[source].node_tree == lobe_nodes.grazing_roughness_group() for source in sources.values())
-                     and narrowing == {nodes.GRAZING_NARROWING[output]},
+                     and narrowing == {nodes.default_grazing_narrowing()[output]},
                      "%s: a lobe's roughness is not the grazing group's at its constant: %s, %s"
                      % (output, sources, narrowing))
         h.expect(material.node_tree.get_output_node("CYCLES").inputs["Surface"].links[0].from_node == baked_node,
@@ -254,6 +254,56 @@ def test_cycles_lobes_narrowed_or_widened():
                      "an unknown Cycles Lobes value must be refused")
         h.expect(e.code == "BAD_SETTINGS" and "SHARP" in e.message, "%s: %s" % (e.code, e.message))
         h.expect(h.dump_material(material) == before, "a refused bake changed the material")
+
+
+def test_grazing_narrowing_is_a_bake_parameter():
+    """A study's other narrowing constants (BakeSettings.grazing_narrowing) reach each output's
+    grazing nodes; a C of 0 draws that output widened; a missing output or a negative C is refused."""
+    from ndfbake import bake, nodes
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory)
+        before = h.dump_material(material)
+        bake.bake_material(material, bake.BakeSettings(max_lobes=2, grazing_narrowing={"BSDF": 2.5,
+                                                                                       nodes.EEVEE_BSDF: 0.0}))
+        tree = material.node_tree.nodes["ndfbake"].node_tree
+        cycles, eevee = (_lobe_roughness_sources(tree, output) for output in ("BSDF", nodes.EEVEE_BSDF))
+        h.expect({tree.nodes[source].inputs["Narrowing"].default_value for source in cycles.values()} == {2.5},
+                 "Cycles' lobes: %s" % cycles)
+        h.expect(all(source.startswith("Decode") for source in eevee.values()), "EEVEE's lobes: %s" % eevee)
+        bake.revert(material)
+        for bad in ({"BSDF": 2.5}, {"BSDF": -1.0, nodes.EEVEE_BSDF: 0.0}, {"BSDF": float("nan"), nodes.EEVEE_BSDF: 0.0}):
+            e = h.raised(bake.BakeError, lambda: bake.bake_material(material, bake.BakeSettings(grazing_narrowing=bad)),
+                         "grazing narrowing %r must be refused" % bad)
+            h.expect(e.code == "BAD_SETTINGS" and "grazing narrowing" in e.message, "%s: %s" % (e.code, e.message))
+        h.expect(h.dump_material(material) == before, "a refused bake changed the material")
+
+
+def test_panel_keeps_its_scan_until_the_material_changes():
+    """The panel's redraws read the material's scan once (panel_state); a change to the material's
+    nodes, then the depsgraph's update (what precedes a redraw in the UI), brings a new scan, and
+    the panel shows what it found."""
+    from ndfbake import material_scan, ui
+    scans = []
+    original = material_scan.scan
+
+    def counted(material):
+        scans.append(material.name)
+        return original(material)
+    with h.scratch_dir() as directory:
+        material = h.baked_scene(directory)
+        material_scan.scan = counted
+        try:
+            first = h.draw_panel(ui, material)
+            h.expect(h.draw_panel(ui, material) == first and scans == ["Bumpy"], "scans %s" % scans)
+            h.expect(any(label.startswith("Normal map: ") for label in first), "labels %s" % first)
+            tree = material.node_tree
+            tree.links.remove(tree.nodes["Normal Map"].outputs["Normal"].links[0])
+            bpy.context.view_layer.update()
+            changed = h.draw_panel(ui, material)
+            h.expect(scans == ["Bumpy", "Bumpy"], "after the change: scans %s" % scans)
+            h.expect(not any(label.startswith("Normal map: ") for label in changed), "labels %s" % changed)
+        finally:
+            material_scan.scan = original
 
 
 def test_save_reopen_then_revert():
@@ -473,6 +523,8 @@ if __name__ == "__main__":
     h.import_addon()
     h.run([test_blender_decodes_the_map_as_the_command_line_does, test_bake_adds_only_the_group_and_bypass,
            test_failure_while_building_nodes_rolls_back, test_operators_rebake_fewer_lobes_and_revert,
-           test_cycles_lobes_narrowed_or_widened, test_save_reopen_then_revert,
+           test_cycles_lobes_narrowed_or_widened,
+           test_grazing_narrowing_is_a_bake_parameter, test_panel_keeps_its_scan_until_the_material_changes,
+           test_save_reopen_then_revert,
            test_bake_all_bakes_what_the_scene_renders, test_linked_inputs_are_carried_and_restored,
            test_a_user_graph_downstream_gets_no_eevee_output, test_pack_option])

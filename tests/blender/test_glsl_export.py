@@ -5,7 +5,7 @@ A 64² fBm map (no repeats at level 3: its texels differ) is baked by the librar
 shader that includes ndfbake.glsl fetches level-3 lobe texels (8×8 fine normals each) from the
 bake's EXR files. Checked:
 - the file's constants are the add-on's (lobe_nodes.GGX_VMF_WIDENING, HALF_INV_KAPPA_RESOLUTION, and
-  the grazing narrowing of Cycles' lobes, nodes.GRAZING_NARROWING), so
+  the grazing narrowing of Cycles' lobes, nodes.default_grazing_narrowing), so
   the shader and the Blender node group decode alike;
 - the filtered GGX distribution, the Lambert cosine and the specular term (16 directions within
   40° of the normal) against the documented rule evaluated in numpy from the same texels;
@@ -249,7 +249,7 @@ def check(directory):
     resolution = shader_constant(source, "NDFB_INV_KAPPA_RESOLUTION")
     narrowing = shader_constant(source, "NDFB_GRAZING_NARROWING")
     h.expect(widening == lobe_nodes.GGX_VMF_WIDENING and resolution == lobe_nodes.HALF_INV_KAPPA_RESOLUTION
-             and narrowing == nodes.GRAZING_NARROWING["BSDF"],
+             and narrowing == nodes.CYCLES_GRAZING_NARROWING,
              "ndfbake.glsl's constants (%g, %g, %g) are not the node group's" % (widening, resolution, narrowing))
     check_level(source, out, normal_map, widening, resolution, narrowing)
     check_flat_specular(source)
