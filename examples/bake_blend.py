@@ -25,9 +25,10 @@ material that does not exist, an unsaved .blend).
 The add-on is the enabled or installed ndfbake if there is one (from Blender 4.2 on an extension,
 module `bl_ext.<repository>.ndfbake`; before, a legacy add-on), else this repository's addon/
 folder; the native library is the one inside the add-on folder, or $NDFBAKE_LIBRARY, or
-build/native/libndfbake.so of this checkout (see addon/ndfbake/native.py).
+build/native/libndfbake.so of this checkout (see addon/ndfbake/core/native.py).
 """
 import argparse
+import importlib
 import os
 import sys
 import time
@@ -41,7 +42,6 @@ def _is_ndfbake(module_name):
 
 
 def _import_addon():
-    import importlib
     # An enabled add-on first (extension or legacy), then an installed one, then this checkout's.
     for name in bpy.context.preferences.addons.keys():
         if _is_ndfbake(name):
@@ -114,7 +114,8 @@ def _delete_unused(lobe_folders):
 def main():
     args = _arguments()
     addon = _import_addon()
-    bake = addon.bake
+    bake = importlib.import_module(addon.__name__ + ".blender.bake")
+    lobe_folders = importlib.import_module(addon.__name__ + ".blender.lobe_folders")
     if not bpy.data.filepath:
         print("bake_blend: open a saved .blend: blender -b FILE.blend --python examples/bake_blend.py", file=sys.stderr)
         return 2
@@ -140,7 +141,7 @@ def main():
     if not materials:
         print("bake_blend: nothing to %s in %s%s" % ("revert" if args.revert else "bake", bpy.data.filepath,
                                                    linked_note))
-        return _delete_unused(addon.lobe_folders) if args.delete_unused else 0
+        return _delete_unused(lobe_folders) if args.delete_unused else 0
 
     settings = bake.BakeSettings(max_lobes=args.max_lobes, tolerance=args.tolerance, refine=args.refine,
                                  pack=args.pack, level_of_detail=args.level_of_detail.upper(),
@@ -169,8 +170,8 @@ def main():
                   ".blend uses, are deleted" % (bpy.data.filepath, str(e).strip()))
             return 1
         # What closing the file does (also at exit): the lobe folders no saved .blend uses go.
-        addon.lobe_folders.delete_unused_folders()
-    if args.delete_unused and _delete_unused(addon.lobe_folders):  # the file on disk is the one in memory
+        lobe_folders.delete_unused_folders()
+    if args.delete_unused and _delete_unused(lobe_folders):  # the file on disk is the one in memory
         failures += 1
     print("%s %d of %d materials in %.1f s%s%s" % ("reverted" if args.revert else "baked", changed, len(materials),
                                                  time.perf_counter() - start,

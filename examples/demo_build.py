@@ -59,13 +59,13 @@ def import_addon(library=None):
 
 def eevee_engine():
     """EEVEE's engine id in this Blender (the add-on's blender_compat; import_addon first)."""
-    from ndfbake import blender_compat
+    from ndfbake.shading import blender_compat
     return blender_compat.eevee_engine()
 
 
 def enable_nodes(id_with_nodes):
     """Gives a material or world its node tree in this Blender (blender_compat; import_addon first)."""
-    from ndfbake import blender_compat
+    from ndfbake.shading import blender_compat
     return blender_compat.enable_nodes(id_with_nodes)
 
 
@@ -73,13 +73,13 @@ def write_normal_map(path, pattern="bumps", size=64, seed=3):
     """A synthetic tangent-space normal map saved by the library (8-bit PNG for .png), or by
     Blender where the library writes no image files (the add-on's, in a Blender without Debian
     12's OpenImageIO: the Blender tests in the Debian 13 chroot)."""
-    from ndfbake import native
+    from ndfbake.core import native, native_abi
     with native.load().context() as ctx:
         with ctx.synthesize(pattern, size, size, seed) as normal_map:
             try:
                 normal_map.save(path)
             except native.Error as e:
-                if e.status != native.ERROR_UNSUPPORTED_FORMAT or not path.endswith(".png"):
+                if e.status != native_abi.ERROR_UNSUPPORTED_FORMAT or not path.endswith(".png"):
                     raise
                 save_normals_png(normal_map.read(), path)
     return path
@@ -190,9 +190,10 @@ def fresh_scene(directory, width=320, height=180, world=DEFAULT_WORLD):
     os.makedirs(directory, exist_ok=True)
     bpy.ops.wm.read_factory_settings(use_empty=True)
     import_addon()
-    from ndfbake import lobe_folders
+    from ndfbake.core import folder_names
+    from ndfbake.blender import lobe_folders
     lobe_folders.delete_folders([os.path.join(directory, name) for name in sorted(os.listdir(directory))
-                                 if name.endswith(lobe_folders.FOLDER_SUFFIX)])
+                                 if name.endswith(folder_names.FOLDER_SUFFIX)])
     return build_scene(directory, width, height, world=world)
 
 

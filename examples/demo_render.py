@@ -51,7 +51,7 @@ def save_pixels(pixels, path, scene=None):
     scene = scene or bpy.context.scene
     h, w = pixels.shape[:2]
     image = bpy.data.images.new("ndfb-demo-pixels", w, h, alpha=False, float_buffer=True)
-    from ndfbake import blender_compat
+    from ndfbake.shading import blender_compat
     image.colorspace_settings.name = blender_compat.linear_color_space()  # else saving would convert
     exr = path.lower().endswith(".exr")
     try:

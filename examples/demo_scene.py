@@ -67,7 +67,7 @@ MAX_LOBES = 8                    # the bumps' ring of 45-degree slopes needs the
 
 def bake_all(scene, max_lobes=MAX_LOBES, **settings):
     """Bakes every material the scene needs with BakeSettings(max_lobes, **settings)."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     settings = bake.BakeSettings(max_lobes=max_lobes, **settings)
     outcomes = bake.bake_materials(bake.materials_needing_bake(scene), settings_for=lambda m: settings)
     summary = []
@@ -159,7 +159,7 @@ def _arguments():
 def main():
     args = _arguments()
     demo_build.import_addon(args.library)
-    from ndfbake import native
+    from ndfbake.core import native
     try:
         native.load()
     except native.LibraryError as e:  # one line, as the add-on's panel says it

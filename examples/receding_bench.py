@@ -178,7 +178,7 @@ def run_map(name, map_path, directory, lights, width, height, reference_samples,
             log=print):
     """Every light and variant of one map, built in the current (empty) file with the add-on
     imported: {"cases": {light: {...}}, "bakes": {...}, "frames": {...}} (no frames with repeats 0)."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     os.makedirs(directory, exist_ok=True)
     material = build(map_path, MAPS[name], width, height)
     scene = bpy.context.scene

@@ -41,7 +41,7 @@ CONSTANT_LEVEL = 2.0
 
 def _groups():
     """The material groups that sample MIP atlases."""
-    from ndfbake import lod_nodes
+    from ndfbake.shading import lod_nodes
     return [g for g in bpy.data.node_groups if lod_nodes.atlas_table(g) is not None]
 
 
@@ -57,7 +57,7 @@ def _unlink_to_constant(tree, output, value):
 
 
 def constant_table():
-    from ndfbake import lod_nodes
+    from ndfbake.shading import lod_nodes
     for tree in _groups():
         taps = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup" and n.node_tree.name == lod_nodes.TAPS_GROUP)
         width, height = taps.inputs["Atlas Width"].default_value, taps.inputs["Atlas Height"].default_value
@@ -71,7 +71,7 @@ def constant_table():
 
 
 def constant_level():
-    from ndfbake import lod_nodes
+    from ndfbake.shading import lod_nodes
     for tree in _groups():
         for node in tree.nodes:
             if node.bl_idname == "ShaderNodeGroup" and node.node_tree.name == lod_nodes.LOD_GROUP:
@@ -82,7 +82,7 @@ def four_taps_a_level():
     """Cycles' lobes read the four Closest lookups a level that EEVEE's read (what a group draws
     where EEVEE draws its BSDF output too) instead of one Linear lookup: the same texels (the
     diffuse base's mean normal follows, through the decodes' moments)."""
-    from ndfbake import nodes
+    from ndfbake.shading import nodes
     for tree in _groups():
         for j in range(nodes.lobe_count(tree)):
             node, taps = (tree.nodes[nodes.DECODE[read] % j] for read in (nodes.LINEAR, nodes.TAPS))
@@ -94,7 +94,7 @@ def four_taps_a_level():
 def no_atlas_sampling():
     """Lobe texel (0.25, 0.05·u, 0.05·v; 0.2375): a weight of 1/4 about a mean normal that
     varies with the UV, so that nothing downstream folds to a constant."""
-    from ndfbake.node_builders import _math
+    from ndfbake.shading.node_builders import _math
     for tree in _groups():
         separate = tree.nodes.new("ShaderNodeSeparateXYZ")
         tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["UV"], separate.inputs[0])
@@ -113,7 +113,7 @@ def no_atlas_sampling():
 def _nudged(tree, socket, nudges):
     """`socket`'s value moved by a relative 1e-6: a copy that reads it is no duplicate Cycles
     merges (it merges nodes of equal inputs), and reads the same texels."""
-    from ndfbake.node_builders import _math, _vmath
+    from ndfbake.shading.node_builders import _math, _vmath
     if socket not in nudges:
         nudges[socket] = (_vmath(tree, "ADD", socket, (1e-7, 0.0, 0.0)) if socket.type == "VECTOR"
                           else _math(tree, "MULTIPLY", socket, 1.0 + 1e-6))
@@ -122,7 +122,7 @@ def _nudged(tree, socket, nudges):
 
 def _copy_upstream(tree, node, shared, copies, nudges):
     """A copy of `node` and of every node it reads from, up to the `shared` ones (read nudged)."""
-    from ndfbake.group_node import _socket_by_identifier
+    from ndfbake.shading.group_node import _socket_by_identifier
     if node in copies:
         return copies[node]
     copy = tree.nodes.new(node.bl_idname)
@@ -162,9 +162,9 @@ def _sampling_twice(lookups_only):
     so the same light paths): what the sampling costs. With lookups_only the second lookups have
     their own tap addresses and bilinear weights but share the level of detail and the atlas
     tables; else everything from the group's inputs and UV is computed twice."""
-    from ndfbake import lod_nodes
-    from ndfbake.group_node import _socket_by_identifier
-    from ndfbake.node_builders import _mix
+    from ndfbake.shading import lod_nodes
+    from ndfbake.shading.group_node import _socket_by_identifier
+    from ndfbake.shading.node_builders import _mix
     for tree in _groups():
         addressing = [n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup"
                       and n.node_tree.name in (lod_nodes.TAPS_GROUP, lod_nodes.POINT_GROUP)]

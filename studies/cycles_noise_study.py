@@ -101,7 +101,7 @@ def split_sun(scene):
                                   math.sin(elevation)))
     px[sun, :3] = fill
     image = bpy.data.images.new(env.image.name + " without sun", w, h, alpha=False, float_buffer=True)
-    from ndfbake import blender_compat
+    from ndfbake.shading import blender_compat
     image.colorspace_settings.name = blender_compat.linear_color_space()
     image.pixels.foreach_set(px.ravel())
     env.image = image
@@ -120,7 +120,7 @@ def split_sun(scene):
 def use_variant(scene, variant, max_lobes):
     """Re-bakes the scene's materials with up to `max_lobes` lobes so that Cycles draws them as
     `variant` says."""
-    from ndfbake import node_builders, nodes
+    from ndfbake.shading import node_builders, nodes
     lobes = nodes.NARROWED if variant.startswith("narrowed") else nodes.WIDENED
     for outcome in demo_scene.bake_all(scene, max_lobes=max_lobes, cycles_lobes=lobes):
         if "error" in outcome:

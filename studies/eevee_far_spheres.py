@@ -56,7 +56,7 @@ def baked_groups(materials):
 
 def bend_lobe_normals(group_tree):
     """Feeds every lobe BSDF's Normal through the bending described in the module docstring."""
-    from ndfbake.node_builders import _math, _vmath
+    from ndfbake.shading.node_builders import _math, _vmath
     tree = group_tree
     bent = 0
     for bsdf in list(tree.nodes):

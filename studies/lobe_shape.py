@@ -39,9 +39,9 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-sys.path.insert(0, os.path.join(HERE, "..", "addon", "ndfbake"))  # native.py needs no bpy
+sys.path.insert(0, os.path.join(HERE, "..", "addon"))  # ndfbake.core needs no bpy
 
-import native  # noqa: E402
+from ndfbake.core import native, native_abi  # noqa: E402
 from grazing.correction import corrected_alpha2  # noqa: E402
 from grazing.ggx import WIDENING, basis, bend, ggx_eval, sample_vmf, strat2  # noqa: E402
 from grazing.texels import kappa_of  # noqa: E402
@@ -61,19 +61,19 @@ def fitted_levels(library, normals, roughness, max_lobes):
     4) of ndfb_pyramid_read_lobe's RGBA. Declares the pyramid calls, which the add-on does not make."""
     lib, vp, u32, floats = library.lib, ctypes.c_void_p, ctypes.c_uint32, ctypes.POINTER(ctypes.c_float)
     for name, restype, argtypes in (
-            ("ndfb_fit", ctypes.c_int, [vp, vp, ctypes.POINTER(native.FitOptions), ctypes.POINTER(vp)]),
+            ("ndfb_fit", ctypes.c_int, [vp, vp, ctypes.POINTER(native_abi.FitOptions), ctypes.POINTER(vp)]),
             ("ndfb_pyramid_destroy", None, [vp]),
             ("ndfb_pyramid_level_size", ctypes.c_int, [vp, u32, ctypes.POINTER(u32), ctypes.POINTER(u32)]),
             ("ndfb_pyramid_read_lobe", ctypes.c_int, [vp, u32, u32, floats, ctypes.c_size_t])):
         getattr(lib, name).restype, getattr(lib, name).argtypes = restype, argtypes
     height, width, _ = normals.shape
-    options = library.init_options(native.FitOptions, lib.ndfb_fit_options_init)
+    options = library.init_options(native_abi.FitOptions, lib.ndfb_fit_options_init)
     options.max_lobes, options.brdf_parameter = max_lobes, roughness
     pyramid, levels = vp(), []
     with library.context() as context, context.normal_map(normals, width, height, 3, True) as normal_map:
         context.check(lib.ndfb_fit(context.handle, normal_map.handle, ctypes.byref(options), ctypes.byref(pyramid)))
         w, h = u32(), u32()
-        while lib.ndfb_pyramid_level_size(pyramid, len(levels), ctypes.byref(w), ctypes.byref(h)) == native.OK:
+        while lib.ndfb_pyramid_level_size(pyramid, len(levels), ctypes.byref(w), ctypes.byref(h)) == native_abi.OK:
             slots = [np.zeros((h.value, w.value, 4), np.float32) for _ in range(max_lobes)]
             for j, rgba in enumerate(slots):
                 context.check(lib.ndfb_pyramid_read_lobe(pyramid, len(levels), j, rgba.ctypes.data_as(floats),

@@ -70,7 +70,7 @@ def sweep_world(out, world, width, height, samples, eevee_samples, converged_sam
 def _measure_variant(scene, renders, masks, images, narrowing, samples, eevee_samples, converged_samples, log):
     """Bakes with the grazing constants `narrowing` ({"cycles": C, "eevee": C}; None: the add-on's),
     renders ndfbake and measures it against the plain renders in `images`."""
-    from ndfbake import nodes
+    from ndfbake.shading import nodes
     settings = {}
     if narrowing is not None:
         settings["grazing_narrowing"] = {nodes.EEVEE_BSDF: narrowing["eevee"],

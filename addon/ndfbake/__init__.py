@@ -8,12 +8,16 @@ libndfbake.dylib or libndfbake.so: native.LIBRARY_NAME) lives beside
 this file; see native.py for where else it is looked for. Registering never fails
 for want of the library: the panel then shows why it cannot be used.
 
-Modules: native (ctypes), image_pixels (the normal map as Blender decodes it), blender_compat (what
-differs between Blender versions), material_scan (finds the normal map), scene_lod (what the scene's
-cameras need), nodes (node groups), lobe_folders (where the textures go, and when they are
-deleted), bake (the work: bake_job its native step, bake_revert its revert), operators and ui
-(thin skins; panel_state keeps the panel's scans between redraws). Scripts call bake.py, or the operators bpy.ops.ndfbake.bake / bake_all / revert;
-examples/bake_blend.py is a command line.
+Three packages, each importing only those before it (tests/tools/test_addon_imports.py checks):
+- core: the library's binding (native), the bake's native step (bake_job), folder names: no bpy,
+  importable by a plain Python;
+- shading: what a bake builds in Blender's data: the material scan, node groups, level of detail,
+  the OSL variant;
+- blender: the bake as Blender runs it (bake, bake_revert, lobe_folders), its operators, panel and
+  handlers (registration).
+Scripts call blender/bake.py (`from ndfbake.blender import bake`), or the operators
+bpy.ops.ndfbake.bake / bake_all / revert; examples/bake_blend.py is a command line. Importing the
+package asks Blender nothing and starts nothing: register() does the rest.
 """
 
 bl_info = {
@@ -27,50 +31,46 @@ bl_info = {
     "category": "Material",
 }
 
-if "bpy" in locals():
-    import importlib
-    for _module in (blender_compat, id_names, native, image_pixels, node_animation, material_scan,  # noqa: F821
-                    scene_lod, node_builders, specular_albedo_table, specular_split, lobe_nodes, lod_nodes,  # noqa: F821
-                    nodes, group_node, osl_group, lobe_folders, bake_job, bake_revert, bake, operators,  # noqa: F821
-                    panel_state, ui):  # noqa: F821
-        importlib.reload(_module)
-
-import atexit  # noqa: E402
-
-import bpy  # noqa: E402
-
-from . import (bake, bake_job, bake_revert, blender_compat, group_node, id_names, image_pixels,  # noqa: E402,F401
-               lobe_folders, lobe_nodes, lod_nodes, material_scan, native, node_animation, node_builders, nodes,
-               operators, osl_group, panel_state, scene_lod, specular_albedo_table, specular_split, ui)
-
 
 def register():
-    lobe_folders.install_handlers()
-    panel_state.install_handlers()
-    for cls in ui.classes + operators.classes:
-        bpy.utils.register_class(cls)
-    bpy.types.Material.ndfbake_settings = bpy.props.PointerProperty(type=ui.NDFBakeSettings)
-    if not bpy.app.binary_path:  # the bpy module: see _unregister_at_exit
-        atexit.register(_unregister_at_exit)
-
-
-def _unregister_at_exit():
-    """In the bpy module, a class left registered keeps bpy alive past Python's finalization,
-    where PyPI's 4.5 hangs and 4.2 crashes (lobe_folders.exit_session), and only add-ons enabled
-    through addon_utils are turned off at its exit, after this: a script that called register()
-    itself would not end. The unsaved folders go first, as at any exit."""
-    lobe_folders.exit_session()
-    unregister()
+    from .blender import registration
+    registration.register()
 
 
 def unregister():
-    """Also after _unregister_at_exit, when the bpy module's exit turns the add-on off again."""
-    atexit.unregister(_unregister_at_exit)
-    if not hasattr(bpy.types.Material, "ndfbake_settings"):  # registered last by register()
-        return
-    operators.stop_running_bakes(bpy.context)
-    lobe_folders.remove_handlers()  # and nothing of this session is deleted any more
-    panel_state.remove_handlers()
-    del bpy.types.Material.ndfbake_settings
-    for cls in reversed(ui.classes + operators.classes):
-        bpy.utils.unregister_class(cls)
+    from .blender import registration
+    registration.unregister()
+
+
+def _reload_submodules():
+    """Blender's Reload Scripts reloads this module only: reload the loaded submodules too, each
+    after the submodules it took names from (a name bound with `from x import name` keeps the
+    object of x's earlier load otherwise)."""
+    import importlib
+    import sys
+    import types
+    loaded = {name: module for name, module in sys.modules.items() if name.startswith(__name__ + ".")}
+
+    def dependencies(module):
+        found = set()
+        for value in vars(module).values():
+            name = value.__name__ if isinstance(value, types.ModuleType) else getattr(value, "__module__", None)
+            if name in loaded and name != module.__name__:
+                found.add(name)
+        return found
+    done = set()
+
+    def reload(name):
+        if name in done:
+            return
+        done.add(name)
+        for dependency in sorted(dependencies(loaded[name])):
+            reload(dependency)
+        importlib.reload(loaded[name])
+    for name in sorted(loaded):
+        reload(name)
+
+
+if "_imported_once" in globals():
+    _reload_submodules()
+_imported_once = True

@@ -1,13 +1,13 @@
 """The add-on's library driven as the add-on drives it, through its own ctypes module
-(addon/ndfbake/native.py, loaded by path: no bpy), with the library NDFBAKE_LIBRARY names: what
+(ndfbake.core.native, imported from the add-on's folder by a plain Python: no bpy), with the library NDFBAKE_LIBRARY names: what
 run_in_debian11.sh runs on a Linux older than Debian 12 (Python 3.9 there).
 
 Pixels in as Blender hands them over (RGBA floats, rows top to bottom), read back as unit normals;
 a bake with a progress callback and the MIP atlas the level of detail reads; a cancelled bake,
 which leaves no files; a texel density of a known quad. Prints one line per check.
-Usage: python3 bake_with_native.py <addon/ndfbake/native.py> <out folder>; exit 0 when all pass.
+Usage: python3 bake_with_native.py <addon folder, the one holding ndfbake/> <out folder>; exit 0 when
+all pass.
 """
-import importlib.util
 import json
 import os
 import sys
@@ -23,10 +23,9 @@ def check(ok, what):
     failures += 0 if ok else 1
 
 
-def main(native_path, out):
-    spec = importlib.util.spec_from_file_location("ndfbake_native", native_path)
-    native = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(native)
+def main(addon_folder, out):
+    sys.path.insert(0, addon_folder)
+    from ndfbake.core import native, native_abi
     print("glibc %s, Python %s" % (os.confstr("CS_GNU_LIBC_VERSION"), sys.version.split()[0]))
     library = native.load()
     check(library.version != "", "loaded %s, version %s" % (library.path, library.version))
@@ -63,7 +62,7 @@ def main(native_path, out):
             ctx.bake(normal_map, cancelled, max_lobes=2, progress=lambda stage, fraction: True)
             check(False, "a cancelled bake returned")
         except native.Error as e:
-            check(e.status == native.ERROR_CANCELLED, "a cancelled bake raises %s" % e.status_name)
+            check(e.status == native_abi.ERROR_CANCELLED, "a cancelled bake raises %s" % e.status_name)
         check(not os.path.exists(cancelled), "a cancelled bake leaves no folder")
         normal_map.close()
 

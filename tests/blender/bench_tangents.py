@@ -22,7 +22,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from ndfb_mesh import library_from_argv, MeshArrays, write_bmesh  # noqa: E402
-from ndfbake import blender_compat  # noqa: E402  (ndfb_mesh put addon/ on the path)
+from ndfbake.shading import blender_compat  # noqa: E402  (ndfb_mesh put addon/ on the path)
 
 REPEATS = 5
 

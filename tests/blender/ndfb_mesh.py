@@ -10,7 +10,7 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "addon"))
-from ndfbake.native import Mesh  # noqa: E402  (one definition of ndfb_mesh, the add-on's)
+from ndfbake.core.native import Mesh  # noqa: E402  (one definition of ndfb_mesh, the add-on's)
 
 
 class SplitStats(ctypes.Structure):

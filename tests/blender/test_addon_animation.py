@@ -29,7 +29,7 @@ def _ramped_scene(directory):
 
 
 def test_animated_inputs_keep_animating():
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material, strength = _ramped_scene(directory)
         tree = material.node_tree
@@ -60,7 +60,7 @@ def test_animated_inputs_keep_animating():
 def test_edits_on_the_group_node_survive_rebake_and_revert():
     """After a bake the group node holds the material's inputs: a colour set and keyframed there
     is what a re-bake starts from and what Revert leaves on the Principled BSDF."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
@@ -85,7 +85,7 @@ def test_the_normal_maps_strength_is_carried_like_the_principleds_inputs():
     """Normal Strength on the group node stands for the Normal Map's Strength: its keyframes go on
     animating after a bake, an edit on the node survives a re-bake, and Revert leaves the node's
     value and keyframes on the Normal Map."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         tree = material.node_tree
@@ -121,7 +121,7 @@ def test_a_keyed_strength_behind_a_muted_link_is_carried():
     """A muted link is no link: the Normal Map's Strength keyframed behind a muted link (its value
     is what renders) animates Normal Strength on the group node (the link carried muted), through a
     re-bake and a failed one, and Revert gives the Normal Map back its link and keyframes exactly."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         tree = material.node_tree
@@ -181,7 +181,7 @@ def test_a_keyed_strength_behind_a_muted_link_is_carried():
 
 
 def test_two_materials_sharing_an_action_bake_and_revert():
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         first, _ = _ramped_scene(directory)
         second = first.copy()
@@ -202,7 +202,8 @@ def test_nla_strips_and_driver_variables_follow_the_inputs():
     elsewhere in the tree that reads a Principled input follow the inputs to the group node and
     back: the strip animates the node, the driver reads the node's value, Revert restores the
     paths, and the copy's strip keeps its curves."""
-    from ndfbake import bake, blender_compat
+    from ndfbake.shading import blender_compat
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         first, strength = _ramped_scene(directory)
         tree = first.node_tree
@@ -274,7 +275,7 @@ def test_curve_settings_and_deletions_on_the_node_survive():
     """A muted, locked, hidden curve with a Breakdown key and two Envelope points is copied with all
     of that (muted on the node too), and comes back the same on Revert; a driver the user removed
     on the group node stays removed on the Principled."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material, strength = _ramped_scene(directory)
         tree = material.node_tree
@@ -306,7 +307,7 @@ def test_curve_settings_and_deletions_on_the_node_survive():
 def test_a_copy_sharing_the_action_keeps_its_own_edits():
     """Two materials share an action: keys the user sets on one are not overwritten by the other's
     bake-time copies when the other is baked or reverted."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         first, _ = _ramped_scene(directory)
         second = first.copy()
@@ -337,7 +338,7 @@ def test_driver_variables_by_socket_name_and_on_the_material_follow():
     """A variable that names the socket and a driver on the material itself read the group node
     while baked and the Principled after Revert; a bake that fails after the node got its inputs
     leaves the variables as they were."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         tree = material.node_tree
@@ -370,7 +371,7 @@ def test_a_driver_variable_reading_the_strength_follows_it():
     """A variable that reads the Normal Map's Strength reads Normal Strength on the group node while
     baked and the Normal Map's again after Revert, and is left as it was by a bake that fails after
     the node got its inputs, as for the Principled's inputs."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         tree = material.node_tree
@@ -396,7 +397,8 @@ def test_a_driver_variable_reading_the_strength_follows_it():
 def test_a_linked_action_is_refused():
     """An action linked from a library cannot keep the group node's curves: LINKED_ANIMATION, and
     the material stays as it was."""
-    from ndfbake import bake, blender_compat
+    from ndfbake.shading import blender_compat
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         action = bpy.data.actions.new("Library Action")

@@ -47,7 +47,7 @@ def unprivileged():
 def expect_refused(material, code, fragments, directory, *, wrap=None):
     """The bake fails with `code`, its message holds every fragment, in bake.py and through the
     operator, and neither the material, the data-blocks nor the folder change."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     before, data_before, files_before = h.dump_material(material), h.data_counts(), h.listing(directory)
     wrap = wrap or contextlib.nullcontext
     with wrap():
@@ -163,7 +163,7 @@ def test_linear_normal_map_with_alpha():
     alpha channel it renders other normals than the file holds, which the library reads. Refused
     with the fix; accepted as Non-Color, with Alpha Channel Packed, as an OpenEXR marked
     Premultiplied, and where there is no alpha."""
-    from ndfbake import blender_compat, material_scan
+    from ndfbake.shading import blender_compat, material_scan
     linear = blender_compat.linear_color_space()
 
     def run(directory):
@@ -241,7 +241,7 @@ def test_read_only_output_folder():
 
 def test_file_in_place_of_the_output_folder():
     def run(directory):
-        from ndfbake import bake
+        from ndfbake.blender import bake
         material = h.baked_scene(directory)
         in_the_way = os.path.join(directory, "Bumpy.ndfbake")
         with open(in_the_way, "w") as f:
@@ -312,7 +312,7 @@ def test_two_normal_map_images():
 def test_one_file_through_two_image_datablocks():
     """Not refused: two Image datablocks of one file (loaded twice) are one normal map."""
     def run(directory):
-        from ndfbake import bake
+        from ndfbake.blender import bake
         material = h.baked_scene(directory)
         _mix_in_a_normal_mapped_principled(material, os.path.join(directory, "normal.png"))
         h.expect(len(bpy.data.images) == 2, "images: %s" % [i.name for i in bpy.data.images])
@@ -324,7 +324,7 @@ def test_one_file_through_two_image_datablocks():
 
 def test_linked_material():
     def run(directory):
-        from ndfbake import bake
+        from ndfbake.blender import bake
         library = h.baked_scene(directory, material_name="Shared Metal")
         bake.bake_material(library, bake.BakeSettings(max_lobes=2))  # baked in its own file
         library.use_fake_user = True
@@ -354,7 +354,7 @@ def test_image_with_unsaved_edits():
 
 def test_muted_normal_map():
     def run(directory):
-        from ndfbake import bake
+        from ndfbake.blender import bake
         material = h.baked_scene(directory)
         material.node_tree.nodes["Normal Map"].mute = True
         expect_refused(material, "NO_NORMAL_MAP", ["'Bumpy'", "muted", "Normal Map"], directory)
@@ -369,7 +369,7 @@ def test_muted_normal_map_link():
     for to_node, to_socket, from_node in (("Principled BSDF", "Normal", "Normal Map"),
                                           ("Normal Map", "Color", "Normal Texture")):
         def run(directory):
-            from ndfbake import bake
+            from ndfbake.blender import bake
             material = h.baked_scene(directory)
             material.node_tree.nodes[to_node].inputs[to_socket].links[0].is_muted = True
             bpy.ops.wm.save_mainfile()
@@ -388,7 +388,7 @@ def test_non_finite_uvs():
         bpy.ops.wm.save_mainfile()
         expect_refused(material, "BAD_MESH", ["'Bumpy'", "not finite", "Level of Detail to Renderer"], directory)
         # The refused bakes kept no folder name: once the mesh is mended, the bake takes the first.
-        from ndfbake import bake
+        from ndfbake.blender import bake
         bpy.data.objects["Plane"].data.uv_layers.active.data[0].uv = (0.0, 0.0)
         result = bake.bake_material(material, bake.BakeSettings(max_lobes=1))
         h.expect(result.folder == "//Bumpy.ndfbake", "the mended bake went to %s" % result.folder)

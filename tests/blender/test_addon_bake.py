@@ -39,9 +39,9 @@ def _principled_count(tree, output="BSDF"):
 
 def _without_role(node_dump):
     """A dump_tree node without the role property a bake puts on the nodes its record names."""
-    from ndfbake import material_scan
+    from ndfbake.shading import bake_record
     kind, props = node_dump
-    return kind, dict(props, custom=[k for k in props["custom"] if k != material_scan.ROLE_KEY])
+    return kind, dict(props, custom=[k for k in props["custom"] if k != bake_record.ROLE_KEY])
 
 
 def test_blender_decodes_the_map_as_the_command_line_does():
@@ -72,7 +72,9 @@ def test_blender_decodes_the_map_as_the_command_line_does():
 
 
 def test_bake_adds_only_the_group_and_bypass():
-    from ndfbake import bake, group_node, material_scan, nodes
+    from ndfbake.shading import bake_record
+    from ndfbake.shading import group_node, nodes
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         before, data_before, files_before = h.dump_material(material), h.data_counts(), h.listing(directory)
@@ -91,8 +93,8 @@ def test_bake_adds_only_the_group_and_bypass():
             tagged = name in ("Principled BSDF", "Normal Map")
             h.expect((_without_role(after["nodes"][name]) if tagged else after["nodes"][name]) == node,
                      "node %s changed" % name)
-            h.expect(tagged == (material_scan.ROLE_KEY in material.node_tree.nodes[name].keys()),
-                     "node %s: role %s" % (name, material.node_tree.nodes[name].get(material_scan.ROLE_KEY)))
+            h.expect(tagged == (bake_record.ROLE_KEY in material.node_tree.nodes[name].keys()),
+                     "node %s: role %s" % (name, material.node_tree.nodes[name].get(bake_record.ROLE_KEY)))
         removed_links = set(before["links"]) - set(after["links"])
         added_links = set(after["links"]) - set(before["links"])
         h.expect(removed_links == {("Principled BSDF", "BSDF", "Material Output", "Surface", False, True)},
@@ -146,7 +148,7 @@ def test_bake_adds_only_the_group_and_bypass():
 
 
 def test_operators_rebake_fewer_lobes_and_revert():
-    from ndfbake import nodes
+    from ndfbake.shading import lobe_bsdfs
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         material.ndfbake_settings.max_lobes = 4  # the panel's settings are the user's, not the bake's
@@ -164,7 +166,7 @@ def test_operators_rebake_fewer_lobes_and_revert():
         tree = groups[0].node_tree
         h.expect(_principled_count(tree) == 1, "one-lobe group expected")
         mixes = [n.name for n in tree.nodes if n.bl_idname == "ShaderNodeMixShader"
-                 and n.name != nodes.EMISSION_ALPHA and not n.name.startswith(nodes.ALPHA_MIX + " ")]
+                 and n.name != lobe_bsdfs.EMISSION_ALPHA and not n.name.startswith(lobe_bsdfs.ALPHA_MIX + " ")]
         h.expect(not mixes, "a one-lobe group mixes no lobes: %s" % mixes)
         rebaked = bpy.path.abspath(h.bake_record(material)["folder"])
         h.expect(os.path.basename(rebaked) == "Bumpy~2.ndfbake", "re-baked into %s" % rebaked)
@@ -196,13 +198,13 @@ def test_operators_rebake_fewer_lobes_and_revert():
 
 def _lobe_roughness_sources(tree, output):
     """The node each lobe BSDF feeding the group's `output` takes its Roughness from, by lobe."""
-    from ndfbake import nodes
+    from ndfbake.shading import lobe_bsdfs
     found, stack = {}, [tree.nodes["Group Output"].inputs[output].links[0].from_node]
     while stack:
         node = stack.pop()
         if node.bl_idname in ("ShaderNodeMixShader", "ShaderNodeAddShader"):
             stack += [link.from_node for socket in node.inputs if socket.type == "SHADER" for link in socket.links]
-        elif node.bl_idname == "ShaderNodeBsdfPrincipled" and not node.name.startswith(nodes.BASE_BSDF):
+        elif node.bl_idname == "ShaderNodeBsdfPrincipled" and not node.name.startswith(lobe_bsdfs.BASE_BSDF):
             found[node.name] = node.inputs["Roughness"].links[0].from_node.name
     return found
 
@@ -212,7 +214,8 @@ def test_cycles_lobes_narrowed_or_widened():
     narrowing of their own (nodes.CYCLES_GRAZING_NARROWING) beside EEVEE's (its own output:
     EEVEE Legacy's narrowing, or in EEVEE Next the widened lobes); a
     re-bake with Widened gives Cycles the widened lobes only; bad values are refused."""
-    from ndfbake import bake, lobe_nodes, nodes
+    from ndfbake.shading import lobe_nodes, nodes
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         before = h.dump_material(material)
@@ -259,7 +262,8 @@ def test_cycles_lobes_narrowed_or_widened():
 def test_grazing_narrowing_is_a_bake_parameter():
     """A study's other narrowing constants (BakeSettings.grazing_narrowing) reach each output's
     grazing nodes; a C of 0 draws that output widened; a missing output or a negative C is refused."""
-    from ndfbake import bake, nodes
+    from ndfbake.shading import nodes
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         before = h.dump_material(material)
@@ -282,7 +286,8 @@ def test_panel_keeps_its_scan_until_the_material_changes():
     """The panel's redraws read the material's scan once (panel_state); a change to the material's
     nodes, then the depsgraph's update (what precedes a redraw in the UI), brings a new scan, and
     the panel shows what it found."""
-    from ndfbake import material_scan, ui
+    from ndfbake.shading import material_scan
+    from ndfbake.blender import ui
     scans = []
     original = material_scan.scan
 
@@ -307,7 +312,8 @@ def test_panel_keeps_its_scan_until_the_material_changes():
 
 
 def test_save_reopen_then_revert():
-    from ndfbake import bake, specular_split
+    from ndfbake.shading import specular_split
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         before = h.dump_material(material)
@@ -339,7 +345,7 @@ def test_save_reopen_then_revert():
 
 
 def test_bake_all_bakes_what_the_scene_renders():
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         h.reset_scene()
         png = h.write_normal_map(os.path.join(directory, "normal.png"), "fbm", 32)
@@ -374,7 +380,9 @@ def test_bake_all_bakes_what_the_scene_renders():
 
 
 def test_linked_inputs_are_carried_and_restored():
-    from ndfbake import bake, blender_compat, nodes
+    from ndfbake.shading import lobe_bsdfs
+    from ndfbake.shading import blender_compat
+    from ndfbake.blender import bake
     specular = blender_compat.principled_input("Specular")
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, metallic=1.0)
@@ -402,7 +410,7 @@ def test_linked_inputs_are_carried_and_restored():
         # cannot give: not carried (Blender still says is_linked here, before a tree update).
         clearcoat = principled.inputs[blender_compat.principled_input("Clearcoat Normal")]
         tree.links.new(tree.nodes["Normal Map"].outputs["Normal"], clearcoat).is_muted = True
-        h.expect(clearcoat.name not in [s.name for s in nodes.carried_inputs(principled)],
+        h.expect(clearcoat.name not in [s.name for s in lobe_bsdfs.carried_inputs(principled)],
                  "a muted Clearcoat Normal link is carried (is_linked: %s)" % clearcoat.is_linked)
         bpy.ops.wm.save_mainfile()
         before = h.dump_material(material)
@@ -433,7 +441,8 @@ def test_a_user_graph_downstream_gets_no_eevee_output():
     """The Principled feeds a Mix Shader, not the output: the graph after it is the user's, so the
     bake adds no EEVEE output (both engines draw the group's BSDF through the user's mix), and a
     displacement on the output stays where it is; Revert restores everything."""
-    from ndfbake import bake, group_node, nodes
+    from ndfbake.shading import group_node, nodes
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, metallic=1.0)
         tree = material.node_tree
@@ -459,12 +468,12 @@ def test_a_user_graph_downstream_gets_no_eevee_output():
 
 
 def material_record(material):
-    from ndfbake import material_scan
-    return material_scan.record(material)
+    from ndfbake.shading import bake_record
+    return bake_record.record(material)
 
 
 def test_pack_option():
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         data_before = h.data_counts()
@@ -480,7 +489,7 @@ def test_failure_while_building_nodes_rolls_back():
     unbaked after a failed first bake; after a failed re-bake, with the previous bake in place
     (its group node with the user's edit on it, node groups, images, drivers, record), so that
     bake_materials' promise holds. Only the failed bake's files go."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bpy.ops.object.camera_add(location=(0.0, 0.0, 4.0))  # level of detail: drivers on the node

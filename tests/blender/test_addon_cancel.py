@@ -50,7 +50,7 @@ def _cancel_at(stage_wanted):
 
 
 def test_cancel_during_fit_and_during_write():
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, size=128)
         before, files_before = h.dump_material(material), _snapshot(directory)
@@ -67,7 +67,7 @@ def test_cancel_during_fit_and_during_write():
 
 
 def test_cancel_worker_thread_from_main_thread():
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="fbm", size=256)
         before, files_before = h.dump_material(material), _snapshot(directory)
@@ -90,7 +90,7 @@ def test_cancel_worker_thread_from_main_thread():
 
 
 def test_cancelled_rebake_keeps_the_previous_bake():
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, size=128)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
@@ -110,7 +110,7 @@ def _drive_modal(material, previews, escape_at=None):
     """Runs the Bake button's modal operator on `material` with timer events, a material preview
     rendering for the first `previews` ticks after the bake; Esc at tick `escape_at` of that wait.
     Returns (what modal returned, how often finish() ran, the reports)."""
-    from ndfbake import bake, operators
+    from ndfbake.blender import bake, operators
 
     class Operator(operators._ModalBakes):
         reports = []
@@ -150,7 +150,7 @@ def _drive_modal(material, previews, escape_at=None):
 
 
 def test_the_modal_operator_applies_a_bake_once_after_the_preview_wait():
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         result, finishes, reports = _drive_modal(material, previews=3)

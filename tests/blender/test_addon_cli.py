@@ -32,7 +32,7 @@ def reopen(blend):
 
 
 def test_command_line_bake_and_revert():
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         h.reset_scene()
         png = h.write_normal_map(os.path.join(directory, "normal.png"), "weave", 64)
@@ -107,7 +107,7 @@ def test_command_line_bake_and_revert():
 def test_revert_leaves_linked_materials_alone():
     """--revert reverts this file's baked materials; one linked from a library (baked in its own
     file) is left alone and counted in the summary, and the run succeeds."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         shared = h.baked_scene(directory, material_name="Shared")
         local = h.normal_mapped_material("Local", os.path.join(directory, "normal.png"))

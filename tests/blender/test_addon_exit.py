@@ -76,7 +76,7 @@ def test_registered_and_baked_session_ends_and_deletes_its_unsaved_folder():
     again), never unregistered: the script ends, and its unsaved folder is deleted at exit."""
     with h.scratch_dir() as directory:
         _run_child(_SCENE % {"here": h.HERE, "directory": directory, "register": True} + textwrap.dedent("""
-            from ndfbake import bake
+            from ndfbake.blender import bake
             bake.bake_material(material, bake.BakeSettings(max_lobes=2))
             assert [n for n in os.listdir(directory) if n.endswith(".ndfbake")], "no lobe folder"
             print("CHILD DONE", flush=True)
@@ -89,7 +89,7 @@ def test_unregistered_bake_ends_and_keeps_the_saved_folder():
     saved .blend uses stays."""
     with h.scratch_dir() as directory:
         _run_child(_SCENE % {"here": h.HERE, "directory": directory, "register": False} + textwrap.dedent("""
-            from ndfbake import bake
+            from ndfbake.blender import bake
             bake.bake_material(material, bake.BakeSettings(max_lobes=2))
             bpy.ops.wm.save_mainfile()
             print("CHILD DONE", flush=True)

@@ -51,8 +51,8 @@ def _level0_lobes(folder):
 
 
 def _images_load(material):
-    from ndfbake import material_scan
-    names = material_scan.record(material)["images"]
+    from ndfbake.shading import bake_record
+    names = bake_record.record(material)["images"]
     for name in names:
         image = bpy.data.images[name]
         image.reload()
@@ -66,9 +66,10 @@ WINDOWS_DEVICE = re.compile(r"(CON|PRN|AUX|NUL|COM[0-9]|LPT[0-9])$", re.IGNORECA
 
 
 def test_windows_device_names_get_folders_windows_can_make():
-    from ndfbake import bake, lobe_folders
+    from ndfbake.core import folder_names
+    from ndfbake.blender import bake
     names = ("CON", "nul", "Aux.001", "com1", "LPT9.x", "prn.", "CONSOLE")
-    folders = [lobe_folders.folder_name(name) for name in names]
+    folders = [folder_names.folder_name(name) for name in names]
     print("  folders: %s" % folders)
     for name, folder in zip(names, folders):
         h.expect(not WINDOWS_DEVICE.match(folder.split(".")[0]), "%r: %s is a Windows device" % (name, folder))
@@ -91,7 +92,8 @@ def test_backslashes_in_saved_paths_still_name_the_files():
     """A .blend saved on Windows may hold '//Bumpy.ndfbake\\level00_lobe0.exr' and
     '//maps\\normal.png', which Blender reads on every system: the add-on must too, or the normal
     map is missing and closing the file deletes the lobe folder it uses. A bake writes '/'."""
-    from ndfbake import bake, lobe_folders, material_scan
+    from ndfbake.shading import bake_record
+    from ndfbake.blender import bake, lobe_folders
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         os.makedirs(os.path.join(directory, "maps"))
@@ -99,7 +101,7 @@ def test_backslashes_in_saved_paths_still_name_the_files():
         material.node_tree.nodes["Normal Texture"].image.filepath = "//maps\\normal.png"
         bpy.ops.wm.save_mainfile()
         result = bake.bake_material(material, bake.BakeSettings(max_lobes=2))
-        rec = material_scan.record(material)
+        rec = bake_record.record(material)
         paths = [bpy.data.images[name].filepath for name in rec["images"]]
         h.expect(all(p.startswith(result.folder + "/") and "\\" not in p for p in paths), "lobe paths: %s" % paths)
         for name in rec["images"]:
@@ -119,7 +121,8 @@ def test_backslashes_in_saved_paths_still_name_the_files():
 
 
 def test_names_that_clash_on_disk_get_folders_of_their_own():
-    from ndfbake import bake, material_scan
+    from ndfbake.shading import bake_record
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         first = h.baked_scene(directory, material_name="Metal 01")
         png = os.path.join(directory, "normal.png")
@@ -141,13 +144,13 @@ def test_names_that_clash_on_disk_get_folders_of_their_own():
         h.expect(not os.path.exists(reverted) and not kept_for, "revert, save and close: %s left, kept for %s"
                  % (reverted, kept_for))
         for material in others:
-            folder = bpy.path.abspath(material_scan.record(material)["folder"])
+            folder = bpy.path.abspath(bake_record.record(material)["folder"])
             h.expect(_lobe_files(folder) == kept[material.name], "%s lost files" % material.name)
             _images_load(material)
 
 
 def test_a_copy_shares_the_folder_until_it_is_baked_itself():
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         original = h.baked_scene(directory)
         bake.bake_material(original, bake.BakeSettings(max_lobes=2))
@@ -177,7 +180,7 @@ def test_a_copy_shares_the_folder_until_it_is_baked_itself():
 
 
 def test_a_rebake_that_fails_keeps_the_previous_bake():
-    from ndfbake import bake, bake_job
+    from ndfbake.blender import bake, lobe_folders
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bake.bake_material(material, bake.BakeSettings(max_lobes=3))
@@ -187,7 +190,7 @@ def test_a_rebake_that_fails_keeps_the_previous_bake():
         material.node_tree.nodes["Normal Map"].name = "Renamed"
         e = h.raised(bake.BakeError, lambda: bake.finish(job), "finish() accepted a material whose nodes changed")
         h.expect(e.code == "MATERIAL_CHANGED", "%s: %s" % (e.code, e.message))
-        bake_job.discard_pending(job)
+        lobe_folders.discard_pending(job)
         material.node_tree.nodes["Renamed"].name = "Normal Map"
         h.expect(h.listing(directory) == listing, "files changed: %s" % h.listing(directory))
         h.expect(h.dump_material(material) == baked, "the baked material changed")
@@ -195,7 +198,7 @@ def test_a_rebake_that_fails_keeps_the_previous_bake():
 
 
 def test_revert_and_rebake_keep_a_mix_shader_added_after_the_bake():
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
@@ -219,7 +222,7 @@ def test_revert_and_rebake_keep_a_mix_shader_added_after_the_bake():
 
 
 def test_box_projection_leaves_filtering_to_the_renderer():
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bpy.ops.object.camera_add(location=(0.0, 0.0, 5.0))
@@ -249,25 +252,26 @@ def _undoable(operator, what):
 def _baked_with_undo(directory):
     """baked_scene, then a bake of Bumpy through the operator with the undo steps a window pushes.
     Returns the bake's folder ('//…')."""
-    from ndfbake import material_scan
+    from ndfbake.shading import bake_record
     h.baked_scene(directory)
     bpy.ops.ed.undo_push(message="ndfbake test scene")
     _undoable(bpy.ops.ndfbake.bake, "bake")
-    return material_scan.record(bpy.data.materials["Bumpy"])["folder"]
+    return bake_record.record(bpy.data.materials["Bumpy"])["folder"]
 
 
 def test_undo_after_rebake_and_revert_finds_the_files():
-    from ndfbake import bake, material_scan
+    from ndfbake.shading import bake_record
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         first = _baked_with_undo(directory)
         bpy.data.materials["Bumpy"].ndfbake_settings.max_lobes = 1
         _undoable(bpy.ops.ndfbake.bake, "re-bake")
-        second = material_scan.record(bpy.data.materials["Bumpy"])["folder"]
+        second = bake_record.record(bpy.data.materials["Bumpy"])["folder"]
         h.expect(first != second, "the re-bake wrote into the first bake's folder %s" % first)
 
         h.expect(bpy.ops.ed.undo() == {"FINISHED"}, "Ctrl-Z after the re-bake")
         material = bpy.data.materials["Bumpy"]
-        rec = material_scan.record(material)
+        rec = bake_record.record(material)
         h.expect(rec and rec["folder"] == first and rec["lobes"] == 4, "Ctrl-Z did not bring back the first bake")
         h.expect(len(_images_load(material)) == 4, "the first bake's images")
 
@@ -283,7 +287,7 @@ def test_undo_after_rebake_and_revert_finds_the_files():
 
 
 def test_save_as_elsewhere_keeps_the_textures():
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
@@ -308,7 +312,7 @@ def test_save_as_elsewhere_keeps_the_textures():
 def test_a_damaged_record_on_another_material_stops_no_bake():
     """A record someone else's script damaged (wrong types) names no folder; the other materials
     bake and Delete Unused lists as before."""
-    from ndfbake import bake, lobe_folders
+    from ndfbake.blender import bake, lobe_folders
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         other = bpy.data.materials.new("Other")
@@ -321,7 +325,8 @@ def test_a_damaged_record_on_another_material_stops_no_bake():
 def test_folders_other_blend_files_use_are_kept():
     """A folder stays while any .blend saved with it exists: the file before a Save As, a Save
     Copy, the library a material was appended from; and Ctrl-Z after a save finds its files."""
-    from ndfbake import bake, lobe_folders, material_scan
+    from ndfbake.shading import bake_record
+    from ndfbake.blender import bake, lobe_folders
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
@@ -332,7 +337,7 @@ def test_folders_other_blend_files_use_are_kept():
         bpy.ops.wm.save_mainfile()
         h.close_file()
         h.expect(os.path.isdir(first), "closing scene_v2.blend deleted the folder scene.blend uses")
-        second = lobe_folders.record_folder(material_scan.record(bpy.data.materials["Bumpy"]))
+        second = lobe_folders.record_folder(bake_record.record(bpy.data.materials["Bumpy"]))
 
         bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "backup.blend"), copy=True)
         bake.revert(bpy.data.materials["Bumpy"])
@@ -350,7 +355,7 @@ def test_folders_other_blend_files_use_are_kept():
 
 
 def test_undo_after_a_save_finds_the_files():
-    from ndfbake import material_scan
+    from ndfbake.shading import bake_record
     with h.scratch_dir() as directory:
         first = _baked_with_undo(directory)
         bpy.ops.wm.save_mainfile()
@@ -359,12 +364,12 @@ def test_undo_after_a_save_finds_the_files():
         bpy.ops.wm.save_mainfile()
         h.expect(bpy.ops.ed.undo() == {"FINISHED"}, "Ctrl-Z after the save")
         material = bpy.data.materials["Bumpy"]
-        h.expect(material_scan.record(material)["folder"] == first, "Ctrl-Z did not bring back the first bake")
+        h.expect(bake_record.record(material)["folder"] == first, "Ctrl-Z did not bring back the first bake")
         h.expect(len(_images_load(material)) == 4, "the first bake's images after a save and Ctrl-Z")
 
 
 def test_delete_unused_folders_keeps_what_ctrl_z_brings_back():
-    from ndfbake import bake, lobe_folders
+    from ndfbake.blender import bake, lobe_folders
     with h.scratch_dir() as directory:
         folder = _baked_with_undo(directory)
         bpy.ops.wm.save_mainfile()  # a save used the folder: closing the file keeps it
@@ -385,7 +390,7 @@ def test_delete_unused_folders_keeps_what_ctrl_z_brings_back():
 
 
 def test_delete_unused_folders_deletes_only_what_this_file_does_not_use():
-    from ndfbake import bake, lobe_folders
+    from ndfbake.blender import bake, lobe_folders
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         bake.bake_material(material, bake.BakeSettings(max_lobes=2))
@@ -415,8 +420,8 @@ def _operator_bake(name):
 def _images_have_pixels(material):
     """The bake's lobe images: each file is where bpy.path.abspath(filepath) says and Blender
     decodes it (has_data, pixels). Returns the lobe folder (absolute)."""
-    from ndfbake import material_scan
-    rec = material_scan.record(material)
+    from ndfbake.shading import bake_record
+    rec = bake_record.record(material)
     h.expect(rec and rec["images"], "%s has no bake record" % material.name)
     folder = os.path.normpath(bpy.path.abspath(rec["folder"]))
     for name in rec["images"]:
@@ -434,7 +439,7 @@ def test_non_ascii_folder_and_material_names():
     """A .blend in 'Zoë Projekte/' named '材質 scene.blend', its material '材質 Zoë', its normal map
     under 'Texturen ü/法線 karte.png': bake, re-bake, reopen and Revert through the operators."""
     import hashlib
-    from ndfbake import material_scan
+    from ndfbake.shading import bake_record
     name = "材質 Zoë"
     with h.scratch_dir() as scratch:
         directory = os.path.join(scratch, "Zoë Projekte")
@@ -452,7 +457,7 @@ def test_non_ascii_folder_and_material_names():
 
         _operator_bake(name)
         expected = "_Zo_~%s.ndfbake" % hashlib.sha1(name.encode("utf-8")).hexdigest()[:8]
-        rec = material_scan.record(material)
+        rec = bake_record.record(material)
         h.expect(rec["folder"] == "//" + expected, "the bake went to %s, not //%s" % (rec["folder"], expected))
         folder = _images_have_pixels(material)
         h.expect(folder == os.path.join(directory, expected) and _level0_lobes(folder) == lobes,
@@ -478,7 +483,7 @@ def test_non_ascii_folder_and_material_names():
 def test_names_that_differ_in_case_get_folders_of_their_own():
     """Windows and macOS see 'Metal.ndfbake' and 'metal.ndfbake' as one folder: two materials whose
     names differ only in case must not share it, whichever is baked first."""
-    from ndfbake import material_scan
+    from ndfbake.shading import bake_record
     for order in (("Metal", "metal"), ("metal", "Metal")):
         with h.scratch_dir() as directory:
             h.reset_scene()
@@ -491,7 +496,7 @@ def test_names_that_differ_in_case_get_folders_of_their_own():
                 material = bpy.data.materials[name]
                 material.ndfbake_settings.max_lobes = 2
                 _operator_bake(name)
-                folders.setdefault(name, []).append(material_scan.record(material)["folder"])
+                folders.setdefault(name, []).append(bake_record.record(material)["folder"])
                 _images_have_pixels(material)
             every = folders[order[0]] + folders[order[1]]
             print("  %s: folders %s" % (" then ".join(order), every))

@@ -142,7 +142,8 @@ save_normals_png = demo_build.save_normals_png
 def bake_image_file(path, out_dir, **settings):
     """Bakes the normal map in the image file `path` into `out_dir` as the add-on does: Blender
     decodes it (image_pixels), the library bakes the pixels (native.Context.bake's settings)."""
-    from ndfbake import image_pixels, native
+    from ndfbake.core import native
+    from ndfbake.blender import image_pixels
     image = bpy.data.images.load(path, check_existing=True)
     image.colorspace_settings.name = "Non-Color"
     p = image_pixels.read(image)
@@ -159,7 +160,7 @@ def reset_scene():
 
 def enable_nodes(id_with_nodes):
     """Gives a material or world its node tree in this Blender (blender_compat)."""
-    from ndfbake import blender_compat
+    from ndfbake.shading import blender_compat
     return blender_compat.enable_nodes(id_with_nodes)
 
 
@@ -266,7 +267,7 @@ def dump_tree(tree):
 
 def tree_fcurves(tree):
     """The F-curves of the tree's active action, through the slot it uses (blender_compat)."""
-    from ndfbake import blender_compat
+    from ndfbake.shading import blender_compat
     animation = tree.animation_data
     return blender_compat.action_fcurves(animation.action, blender_compat.animation_slot(animation))
 
@@ -323,16 +324,16 @@ def close_file():
     """What closing the .blend does to lobe folders (opening another file, File > Revert, quit:
     lobe_folders' load_pre and exit handlers): deletes those the file as saved no longer uses, and
     the undo steps that could bring back a bake go."""
-    from ndfbake import lobe_folders
+    from ndfbake.blender import lobe_folders
     outcome = lobe_folders.delete_unused_folders()
     lobe_folders.forget_undo_steps()
     return outcome
 
 
 def bake_record(material):
-    """The bake's record on `material` (material_scan.record), or None."""
-    from ndfbake import material_scan
-    return material_scan.record(material)
+    """The bake's record on `material` (bake_record.record), or None."""
+    from ndfbake.shading import bake_record
+    return bake_record.record(material)
 
 
 def bake_group_nodes(material):
@@ -343,7 +344,8 @@ def bake_group_nodes(material):
 def bake_with_a_bug_in(material, function, **settings):
     """Bakes with <function> of the node modules (nodes, group_node, lod_nodes) raising, and returns
     the BakeError the bake must end with."""
-    from ndfbake import bake, group_node, lod_nodes, nodes
+    from ndfbake.shading import group_node, lod_nodes, nodes
+    from ndfbake.blender import bake
     module = next(m for m in (nodes, group_node, lod_nodes) if hasattr(m, function))
     original = getattr(module, function)
 

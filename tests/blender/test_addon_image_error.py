@@ -98,7 +98,7 @@ CONVERGED_BRIGHTNESS_BOUND = 0.12 if bpy.app.version >= (4, 2, 0) else 0.45
 
 
 def test_image_error_against_references():
-    from ndfbake import nodes
+    from ndfbake.shading import nodes
     with h.scratch_dir() as directory:
         h.reset_scene()
         scene_info = demo_build.build_scene(directory, WIDTH, HEIGHT, world=WORLD)
@@ -256,7 +256,9 @@ def reopen(blend):
 
 
 def test_command_line_bake_changes_only_the_baked_materials():
-    from ndfbake import bake, lobe_folders, node_builders
+    from ndfbake.core import folder_names
+    from ndfbake.shading import node_builders
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         h.reset_scene()
         scene_info = demo_build.build_scene(directory, WIDTH, HEIGHT, world=WORLD)
@@ -287,7 +289,7 @@ def test_command_line_bake_changes_only_the_baked_materials():
             h.expect(new, "the bake added no %s" % kind)
             untagged = [name for name in new if node_builders.TAG not in after[kind][name][-1]]
             h.expect(not untagged, "%s added without the ndfbake tag: %s" % (kind, untagged))
-        folders = [os.path.join(directory, lobe_folders.folder_name(name)) for name in expected]
+        folders = [os.path.join(directory, folder_names.folder_name(name)) for name in expected]
         h.expect(all(os.path.isdir(f) for f in folders), "a lobe folder is missing: %s" % os.listdir(directory))
 
         for name in expected:

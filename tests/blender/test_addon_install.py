@@ -33,9 +33,11 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import test_addon_helpers as h  # noqa: E402
 
 ADDON_SOURCE = os.path.join(h.REPO, "addon", "ndfbake")
-MODULES = {n for n in os.listdir(ADDON_SOURCE) if n.endswith(".py")}
-# The OSL variant's shader source (osl_group.py).
-MODULES |= {"osl/" + n for n in os.listdir(os.path.join(ADDON_SOURCE, "osl")) if n.endswith(".osl")}
+# The package's modules in their subpackages and the OSL variant's shader source (osl_group.py), as
+# paths in the zip.
+MODULES = {os.path.relpath(os.path.join(folder, n), ADDON_SOURCE).replace(os.sep, "/")
+           for folder, _, names in os.walk(ADDON_SOURCE) if "__pycache__" not in folder
+           for n in names if n.endswith((".py", ".osl"))}
 LIBRARY = h.LIBRARY_NAME  # the library in this platform's zip
 # The library's bundled dependencies (OpenEXR's): shared objects beside it, found through $ORIGIN
 # (DLLs beside it on Windows, found in the folder of the DLL loaded by its path).
@@ -116,14 +118,14 @@ def test_installed_zip_loads_its_own_library_and_bakes():
     with h.scratch_dir("ndfb-install-") as target, h.scratch_dir() as directory:
         module, installed = _install(_zip(), target)
         h.expect(os.path.dirname(os.path.abspath(module.__file__)) == installed, "module from %s" % module.__file__)
-        lib = module.native.load()
-        h.expect(module.native.LIBRARY_NAME == LIBRARY, "the add-on looks for %s" % module.native.LIBRARY_NAME)
+        lib = module.core.native.load()
+        h.expect(module.core.native.LIBRARY_NAME == LIBRARY, "the add-on looks for %s" % module.core.native.LIBRARY_NAME)
         h.expect(lib.path == os.path.join(installed, LIBRARY), "library from %s" % lib.path)
         version = tuple(int(x) for x in lib.version.split("."))
         h.expect(_declared_version(module) == version, "declared %s vs library %s" % (_declared_version(module),
                                                                                    lib.version))
-        available, message = module.nodes.osl_status()
-        offered = bool(bpy.app.build_options.cycles_osl) and module.blender_compat.osl_texture_wraps()
+        available, message = module.shading.osl_group.build_status()
+        offered = bool(bpy.app.build_options.cycles_osl) and module.shading.blender_compat.osl_texture_wraps()
         h.expect(available == offered and "OSL" in message, message)
         print("  installed %s as %s (library %s); %s" % (installed, module.__name__, lib.version, message))
 
@@ -138,7 +140,7 @@ def test_installed_zip_loads_its_own_library_and_bakes():
         bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "scene.blend"))
         before = h.dump_material(material)
         h.expect(bpy.ops.ndfbake.bake(material="Installed") == {"FINISHED"}, "bake")
-        h.expect(module.bake.is_baked(material), "not baked")
+        h.expect(module.blender.bake.is_baked(material), "not baked")
         h.expect(bpy.ops.ndfbake.revert(material="Installed") == {"FINISHED"}, "revert")
         h.expect(h.dump_material(material) == before, "revert did not restore the material")
         _uninstall(module)
@@ -163,22 +165,22 @@ def child_case(case):
         module = _enable_installed()
         assert module is not None, "the linked add-on did not enable"
         built = os.path.join(h.REPO, "build", "native", LIBRARY)
-        assert built in module.native.candidate_paths(), module.native.candidate_paths()
+        assert built in module.core.native.candidate_paths(), module.core.native.candidate_paths()
         print("CHILD OK looks for " + built)
         return
     if case == "numpy":
         sys.modules["numpy"] = None  # `import numpy` now raises ImportError: a Blender without NumPy
     module = _enable_installed()
     assert module is not None, "the add-on must enable without its library"
-    lib, message = module.native.status()
+    lib, message = module.core.native.status()
     assert lib is None and message, (lib, message)
     expected = {"missing": "native library not found", "broken": "could not be loaded",
-                "abi": "has ABI version 99, this add-on needs %d" % module.native.ABI_VERSION,
+                "abi": "has ABI version 99, this add-on needs %d" % module.core.native_abi.ABI_VERSION,
                 "numpy": "NumPy is missing from Blender's Python"}[case]
     assert expected in message, message
     assert "\n" not in message
     material = bpy.data.materials.new("M")
-    labels = h.draw_panel(module.ui, material)
+    labels = h.draw_panel(module.blender.ui, material)
     assert "".join("".join(labels).split()) == "".join(message.split()), labels  # the message, wrapped
     e = h.raised(RuntimeError, lambda: bpy.ops.ndfbake.bake(material="M"), "the bake must fail without a library")
     assert "ndfbake: " + message in " ".join(str(e).split()), str(e)

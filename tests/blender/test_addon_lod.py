@@ -52,7 +52,7 @@ def _resolution(width, height):
 
 
 def test_camera_footprint_is_the_pinhole_pixel_angle():
-    from ndfbake import scene_lod
+    from ndfbake.shading import scene_lod
     h.reset_scene()
     scene = bpy.context.scene
     camera = _camera(lens=50.0)
@@ -89,7 +89,7 @@ def test_camera_footprint_is_the_pinhole_pixel_angle():
 
 
 def test_material_lod_measures_texel_density_and_the_levels_reached():
-    from ndfbake import scene_lod
+    from ndfbake.shading import scene_lod
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="bumps", size=64)  # plane of side 2, UVs 0..1
         scene = bpy.context.scene
@@ -136,8 +136,8 @@ def _render_cycles(path, width, height):
 
 
 def test_the_level_of_detail_group_renders_the_footprint_formula():
-    from ndfbake import lod_nodes
-    from ndfbake.scene_lod import STRETCH
+    from ndfbake.shading import lod_nodes
+    from ndfbake.shading.scene_lod import STRETCH
     h.reset_scene()
     with h.scratch_dir() as directory:
         width, height, lens, depth = 48, 32, 18.0, 5.0  # wide angle: the view angle varies a lot
@@ -174,7 +174,7 @@ def test_the_level_of_detail_group_renders_the_footprint_formula():
 
 
 def test_atlas_lookups_equal_bilinear_filtering_of_the_level_files():
-    from ndfbake import lod_nodes
+    from ndfbake.shading import lod_nodes
     h.reset_scene()
     with h.scratch_dir() as directory:
         normal_map = h.write_normal_map(os.path.join(directory, "weave.png"), pattern="weave", size=32)
@@ -234,7 +234,8 @@ def test_atlas_lookups_equal_bilinear_filtering_of_the_level_files():
 
 
 def test_a_bake_with_a_camera_writes_only_the_levels_it_reaches():
-    from ndfbake import bake, nodes, scene_lod
+    from ndfbake.shading import nodes, scene_lod
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="fbm", size=128)
         _resolution(64, 64)
@@ -304,7 +305,8 @@ def test_cycles_alone_reads_each_level_with_one_linear_lookup():
     Cycles renders the same through either. Where EEVEE draws the BSDF output too (the Principled
     feeds the user's Mix Shader; a re-bake after the user deleted the EEVEE output), it reads the
     Closest lookups only: EEVEE would MIP-map a Linear one and break at the atlas's tile seams."""
-    from ndfbake import bake, group_node, node_builders, nodes
+    from ndfbake.shading import group_node, node_builders, nodes
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="fbm", size=128, metallic=0.0)
         _resolution(48, 48)
@@ -360,7 +362,7 @@ def test_cycles_alone_reads_each_level_with_one_linear_lookup():
 def test_revert_removes_the_atlas_table_of_a_long_material_name():
     """Blender cuts names at 63 bytes, so the atlas table of 'NDFB <name>' is no '<group> atlas':
     Revert finds it through the group's nodes."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, size=32, material_name="M" * 63)
         _camera(location=(0.0, 0.0, 6.0), lens=50.0)
@@ -377,7 +379,7 @@ def test_a_rebake_of_a_long_material_name_names_its_atlas_table():
     the material's name: Blender cuts ID names at 63 bytes, so "<group> atlas" cannot be how the
     table is found, and its name keeps " atlas" within those 63 bytes (renaming it to the group's
     cut name would rename the group: Blender 3.4 gives a taken name to the ID renamed)."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         name = "M" * 60
         material = h.baked_scene(directory, size=32, material_name=name)
@@ -409,7 +411,7 @@ def test_long_names_that_blender_cuts_alike_keep_what_each_id_is():
     characters, A or B: 66 bytes of UTF-8): the second bake's group takes a .001, and every name still
     says what it is: the atlas tables end in " atlas" after their group's number, the images in
     " lobe j" (before a .001 of their own), all valid UTF-8 within 63 bytes; re-bakes keep them."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         stem = "\u6f22" * 20
         first = h.baked_scene(directory, size=32, material_name=stem + "A")
@@ -445,7 +447,7 @@ def test_long_names_that_blender_cuts_alike_keep_what_each_id_is():
 
 
 def test_a_mapping_node_scales_the_texel_density():
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="fbm", size=128)
         _resolution(64, 64)
@@ -514,7 +516,7 @@ def test_a_mapping_node_scales_the_texel_density():
 
 
 def test_texel_density_counts_only_the_material_faces_and_the_render_uv_map():
-    from ndfbake import scene_lod
+    from ndfbake.shading import scene_lod
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="bumps", size=64)
         other = bpy.data.materials.new("Other")

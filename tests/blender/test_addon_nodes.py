@@ -52,7 +52,7 @@ def image_rgba(image):
 
 def probe_material(name, image, output):
     """Emission of the decode group's outputs for lobe image `image`."""
-    from ndfbake import lobe_nodes
+    from ndfbake.shading import lobe_nodes
     material = bpy.data.materials.new(name)
     h.enable_nodes(material)
     tree = material.node_tree
@@ -91,7 +91,8 @@ def render(scene, engine, path, width, height):
 
 
 def test_decode_group_matches_the_rule_in_both_engines():
-    from ndfbake import bake, blender_compat
+    from ndfbake.shading import blender_compat
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="scratches", size=SIZE, roughness=ROUGHNESS)
         bake.bake_material(material, bake.BakeSettings(max_lobes=4))
@@ -185,7 +186,7 @@ def test_grazing_group_matches_its_formula_in_both_engines():
     """A grid of planes under an orthographic camera looking down (the view direction is +Z at
     every pixel), each showing as emission the group's output for one widened roughness and one
     constant lobe normal tilted from the view."""
-    from ndfbake import blender_compat, lobe_nodes
+    from ndfbake.shading import blender_compat, lobe_nodes
     with h.scratch_dir() as directory:
         h.reset_scene()
         scene = bpy.context.scene
@@ -224,10 +225,10 @@ def test_grazing_group_matches_its_formula_in_both_engines():
 
 def _lobe_bsdfs(material):
     """The Principled BSDFs of the bake's lobes in `material` (not the specular split's base)."""
-    from ndfbake import nodes
+    from ndfbake.shading import lobe_bsdfs
     group = h.bake_group_nodes(material)[0]
     return [n for n in group.node_tree.nodes
-            if n.bl_idname == "ShaderNodeBsdfPrincipled" and not n.name.startswith(nodes.BASE_BSDF)]
+            if n.bl_idname == "ShaderNodeBsdfPrincipled" and not n.name.startswith(lobe_bsdfs.BASE_BSDF)]
 
 
 def _lobe_distributions(material):
@@ -249,7 +250,8 @@ def test_lobes_keep_ggx_where_the_material_transmits():
     or Transmission Roughness non-zero, linked or animated): Blender's Principled BSDF with
     Multiscatter GGX has no Transmission Roughness, so rough glass would turn sharp. (Principled
     v2, Blender 4.0+, has no Transmission Roughness: the cases that set it are left out there.)"""
-    from ndfbake import bake, blender_compat
+    from ndfbake.shading import blender_compat
+    from ndfbake.blender import bake
     transmission_input = blender_compat.principled_input("Transmission")
     roughness_input = blender_compat.principled_input("Transmission Roughness")
     with h.scratch_dir() as directory:
@@ -294,9 +296,10 @@ def test_whole_copy_lobes_leave_closures_off_as_constants():
     """A whole-copy lobe (Principled v1, or v2 with a coat) takes Metallic 1, Alpha 1 and a coat,
     sheen, subsurface or transmission of 0 as constants where the material holds them there with
     nothing to change them, and from the group's inputs where they are linked, animated or another
-    value: EEVEE compiles the closures a linked socket may turn on (nodes.CLOSURE_OFF_VALUES).
+    value: EEVEE compiles the closures a linked socket may turn on (lobe_bsdfs.CLOSURE_OFF_VALUES).
     Checked against the material's own sockets, case by case, not against the add-on's table."""
-    from ndfbake import bake, blender_compat
+    from ndfbake.shading import blender_compat
+    from ndfbake.blender import bake
     coat = blender_compat.principled_input("Clearcoat")
     sheen = blender_compat.principled_input("Sheen")
     v2 = bpy.app.version >= (4, 0, 0)

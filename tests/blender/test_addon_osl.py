@@ -40,7 +40,8 @@ def osl_scene(scene):
 
 
 def test_bake_compiles_renders_and_reverts():
-    from ndfbake import bake, osl_group
+    from ndfbake.shading import osl_group
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="bumps", size=64, roughness=0.35, metallic=0.3)
         scene = h.sun_lit_scene(32, cycles_samples=4)
@@ -80,14 +81,15 @@ def test_bake_compiles_renders_and_reverts():
 
 
 def test_offered_only_where_cycles_runs_osl_on_the_cpu():
-    from ndfbake import bake, nodes, osl_group
+    from ndfbake.shading import osl_group
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="bumps", size=16)
         scene = bpy.context.scene
         osl_scene(scene)
-        h.expect(nodes.osl_status(scene)[0], nodes.osl_status(scene)[1])
+        h.expect(osl_group.status(scene)[0], osl_group.status(scene)[1])
         scene.cycles.shading_system = False
-        available, why = nodes.osl_status(scene)
+        available, why = osl_group.status(scene)
         h.expect(not available and "Open Shading Language" in why, why)
         error = h.raised(bake.BakeError, lambda: bake.bake_material(material, bake.BakeSettings(shader="OSL")),
                          "an OSL bake with OSL off")
@@ -118,7 +120,8 @@ def test_offered_only_where_texture_lookups_wrap():
     s in [2.25, 2.75], t in [-1.75, -1.25]: where that is red, blender_compat.osl_texture_wraps must
     say so and the variant is offered; where black, the variant is refused by name and a bake asked
     for it leaves the material as it was."""
-    from ndfbake import bake, blender_compat, osl_group
+    from ndfbake.shading import blender_compat, osl_group
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         h.reset_scene()
         red = bpy.data.images.new("red", 4, 4, float_buffer=True)
@@ -192,7 +195,7 @@ def _flat_texel_scene(directory):
 
 
 def test_flat_texel_matches_the_stock_group():
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         scene, plane, materials = _flat_texel_scene(directory)
         for kind, material in materials.items():
@@ -231,7 +234,8 @@ def test_lobe_normals_are_the_normal_map_nodes():
     against the group's own Normal Map node of slot 0's decoded normal (its EEVEE path, the same
     texel: a V-groove map is one texel at every level from 1 up, here about level 2), as emission,
     one sample at each pixel's centre; within 0.1 degrees."""
-    from ndfbake import bake, osl_group
+    from ndfbake.shading import osl_group
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         h.reset_scene()
         image_path = h.write_normal_map(os.path.join(directory, "vgroove.png"), "vgroove", 64)
@@ -295,7 +299,7 @@ def main():
         print("skipped: this Blender has no OSL (bpy.app.build_options.cycles_osl is False)")
         return
     h.import_addon()
-    from ndfbake import blender_compat
+    from ndfbake.shading import blender_compat
     tests = [test_offered_only_where_texture_lookups_wrap]
     if blender_compat.osl_texture_wraps():
         tests += [test_bake_compiles_renders_and_reverts, test_offered_only_where_cycles_runs_osl_on_the_cpu,

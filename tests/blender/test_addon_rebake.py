@@ -24,7 +24,7 @@ def test_a_material_changed_during_the_bake_is_not_baked():
     """What the worker fitted must be what the material shows: a normal map swapped or set to
     object space while the bake ran refuses it (MATERIAL_CHANGED, nothing changed, no folder); a
     renamed material still gets its bake."""
-    from ndfbake import bake, bake_job
+    from ndfbake.blender import bake, lobe_folders
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         tree = material.node_tree
@@ -41,7 +41,7 @@ def test_a_material_changed_during_the_bake_is_not_baked():
             change()
             e = h.raised(bake.BakeError, lambda: bake.finish(job), "a bake of a changed material was applied")
             h.expect(e.code == "MATERIAL_CHANGED", "%s: %s" % (e.code, e.message))
-            bake_job.discard_pending(job)
+            lobe_folders.discard_pending(job)
             undo()
             h.expect(h.dump_material(material) == before, "the refused bake changed the material")
             h.expect(not [f for f in os.listdir(directory) if ".ndfbake" in f], "files left: %s" % os.listdir(directory))
@@ -56,7 +56,9 @@ def test_renamed_nodes_are_found_again():
     """Renamed after the bake, the Principled BSDF, the Normal Map, the group node and the EEVEE
     output are still the record's: a re-bake fits the Roughness set on the group node, and
     Revert restores the material exactly (names aside)."""
-    from ndfbake import bake, group_node, material_scan, node_builders
+    from ndfbake.shading import bake_record
+    from ndfbake.shading import group_node, node_builders
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         tree = material.node_tree
@@ -67,12 +69,12 @@ def test_renamed_nodes_are_found_again():
             tree.nodes[old].name = new
         tree.nodes["Filtered"].inputs["Roughness"].default_value = 0.9
         bake.bake_material(material, bake.BakeSettings(max_lobes=1))
-        settings = material_scan.record(material)["settings"]
+        settings = bake_record.record(material)["settings"]
         h.expect(abs(settings["roughness"] - 0.9) < 1e-6, "the re-bake fitted roughness %g, not the group "
                  "node's 0.9" % settings["roughness"])
         tree.nodes["ndfbake"].name = "Filtered again"
         bake.revert(material)
-        h.expect(not [n.name for n in tree.nodes if material_scan.ROLE_KEY in n.keys() or n.get(node_builders.TAG)],
+        h.expect(not [n.name for n in tree.nodes if bake_record.ROLE_KEY in n.keys() or n.get(node_builders.TAG)],
                  "nodes of the bake left: %s" % [n.name for n in tree.nodes])
         skin = tree.nodes["Skin"]
         h.expect([l.to_node.name for l in skin.outputs["BSDF"].links] == ["Material Output"], "Skin not at the output")
@@ -86,7 +88,7 @@ def test_renamed_nodes_are_found_again():
 def test_a_deleted_principled_is_made_again():
     """The bypassed Principled BSDF deleted after the bake: a re-bake says so, and Revert makes it
     again from the group node's inputs and the recorded settings, where it was."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         tree = material.node_tree
@@ -121,7 +123,7 @@ def test_a_rebake_without_one_of_two_normal_maps_reverts_that_one():
     """Two Principled BSDFs baked; the Normal link of one removed: a re-bake bakes the other and
     gives the first its links back (its group node and node group go before the new bake's
     groups are named)."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material, second, mix = _two_principled_scene(directory)
         tree = material.node_tree
@@ -142,7 +144,8 @@ def test_a_rebake_without_a_renamed_one_of_two_normal_maps():
     nodes still carry the key "ndfbake" in their roles when the re-baked target's new node is
     named, and must not be taken for the new node's (nor it for theirs). The re-baked target keeps
     a working group node, the dropped one gets its links back, and Revert restores the material."""
-    from ndfbake import bake, material_scan
+    from ndfbake.shading import bake_record
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material, second, mix = _two_principled_scene(directory)
         tree = material.node_tree
@@ -158,7 +161,7 @@ def test_a_rebake_without_a_renamed_one_of_two_normal_maps():
 
         rec = h.bake_record(material)
         h.expect([t["principled"] for t in rec["targets"]] == ["Second BSDF"], "re-baked: %s" % rec["targets"])
-        (target, principled, node, _), = material_scan.recorded_targets(tree, rec)
+        (target, principled, node, _), = bake_record.recorded_targets(tree, rec)
         h.expect(principled == second, "the record's Principled BSDF: %s" % principled)
         h.expect(node is not None and node.name == target["group_node"] and node in h.bake_group_nodes(material),
                  "the record's group node %r is not in the material: %s"
@@ -168,10 +171,10 @@ def test_a_rebake_without_a_renamed_one_of_two_normal_maps():
         h.expect(mix.inputs[2].links[0].from_node == node, "the new group node does not feed the mix")
         h.expect(h.bake_group_nodes(material) == [node], "group nodes: %s" % [n.name for n in h.bake_group_nodes(material)])
         h.expect(mix.inputs[1].links[0].from_node == first, "the first BSDF does not feed the mix again")
-        h.expect(material_scan.ROLE_KEY not in first.keys(), "the dropped BSDF keeps role %s"
-                 % first.get(material_scan.ROLE_KEY))
-        h.expect(second.get(material_scan.ROLE_KEY) == material_scan.node_role("principled", node.name),
-                 "the second BSDF's role: %s" % second.get(material_scan.ROLE_KEY))
+        h.expect(bake_record.ROLE_KEY not in first.keys(), "the dropped BSDF keeps role %s"
+                 % first.get(bake_record.ROLE_KEY))
+        h.expect(second.get(bake_record.ROLE_KEY) == bake_record.node_role("principled", node.name),
+                 "the second BSDF's role: %s" % second.get(bake_record.ROLE_KEY))
 
         bake.revert(material)
         tree.links.new(tree.nodes["Normal Map"].outputs["Normal"], first.inputs["Normal"])
@@ -184,7 +187,8 @@ def test_a_deleted_group_node_beside_a_renamed_one_is_baked_again():
     second's deleted: the re-bake's new group node for the second must not take the first's role
     key with the name "ndfbake", or committing the first's replacement rekeys both. Both targets
     end with their group nodes, and Revert restores the material."""
-    from ndfbake import bake, material_scan
+    from ndfbake.shading import bake_record
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material, _, _ = _two_principled_scene(directory)
         tree = material.node_tree
@@ -194,12 +198,12 @@ def test_a_deleted_group_node_beside_a_renamed_one_is_baked_again():
         tree.nodes["ndfbake"].name = "bar"
         tree.nodes.remove(tree.nodes["ndfbake.001"])
         bake.bake_material(material, settings)
-        found = material_scan.recorded_targets(tree, h.bake_record(material))
+        found = bake_record.recorded_targets(tree, h.bake_record(material))
         h.expect([(p.name if p else None, g.name if g else None) for _, p, g, _ in found]
                  == [(t["principled"], t["group_node"]) for t, _, _, _ in found]
                  and len(found) == 2 and len(h.bake_group_nodes(material)) == 2,
                  "the record's nodes: %s; roles: %s" % ([t for t, _, _, _ in found],
-                                                         [(n.name, n.get(material_scan.ROLE_KEY)) for n in tree.nodes]))
+                                                         [(n.name, n.get(bake_record.ROLE_KEY)) for n in tree.nodes]))
         bake.revert(material)
         h.expect(h.dump_material(material) == before, "material differs after revert: %s"
                  % h.differences(before, h.dump_material(material)))
@@ -222,12 +226,14 @@ def test_a_rebake_while_a_lobe_file_is_open_elsewhere():
     the operator's re-bake: it succeeds, or it is cancelled with an error that names the file and
     leaves every file byte for byte and the material's nodes as they were, with no temporary files.
     Closed again, the re-bake succeeds."""
-    from ndfbake import lobe_folders, material_scan
+    from ndfbake.shading import bake_record
+    from ndfbake.core import folder_names
+    from ndfbake.blender import lobe_folders
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         material.ndfbake_settings.max_lobes = 2
         h.expect(bpy.ops.ndfbake.bake(material="Bumpy") == {"FINISHED"}, "the first bake did not finish")
-        first = lobe_folders.record_folder(material_scan.record(material))
+        first = lobe_folders.record_folder(bake_record.record(material))
         held = os.path.join(first, sorted(n for n in os.listdir(first) if n.endswith(".exr"))[0])
         files = _file_bytes(directory)
         material.ndfbake_settings.max_lobes = 1
@@ -240,13 +246,13 @@ def test_a_rebake_while_a_lobe_file_is_open_elsewhere():
                 outcome, error = {"CANCELLED"}, str(e)
         print("  re-bake with %s open: %s %s" % (os.path.basename(held), outcome, error or ""))
         if outcome == {"FINISHED"}:
-            rec = material_scan.record(material)
+            rec = bake_record.record(material)
             h.expect(rec["lobes"] == 1, "the re-bake's record: %s lobes" % rec["lobes"])
             second = lobe_folders.record_folder(rec)
             h.expect(os.path.normcase(second) != os.path.normcase(first), "the re-bake wrote into %s" % first)
             h.expect({k: v for k, v in _file_bytes(directory).items() if k in files} == files,
                      "the re-bake changed the previous bake's files")
-            left = [n for n in os.listdir(second) if not lobe_folders.is_bake_file(n)]
+            left = [n for n in os.listdir(second) if not folder_names.is_bake_file(n)]
             h.expect(not left, "files left in %s: %s" % (second, left))
         else:
             h.expect(outcome == {"CANCELLED"} and error, "the re-bake returned %s" % outcome)
@@ -254,12 +260,12 @@ def test_a_rebake_while_a_lobe_file_is_open_elsewhere():
             h.expect(_file_bytes(directory) == files, "files changed: %s" % h.listing(directory))
             after = h.dump_material(material)
             h.expect(after == before, "the material changed: %s" % h.differences(before, after))
-        h.expect(not [n for n in os.listdir(directory) if n.endswith(lobe_folders.PENDING_SUFFIX)],
+        h.expect(not [n for n in os.listdir(directory) if n.endswith(folder_names.PENDING_SUFFIX)],
                  "pending folders left: %s" % os.listdir(directory))
 
         material.ndfbake_settings.max_lobes = 3
         h.expect(bpy.ops.ndfbake.bake(material="Bumpy") == {"FINISHED"}, "the re-bake after closing the file")
-        rec = material_scan.record(material)
+        rec = bake_record.record(material)
         h.expect(rec["lobes"] == 3, "the last re-bake's record: %s lobes" % rec["lobes"])
         for name in rec["images"]:
             image = bpy.data.images[name]

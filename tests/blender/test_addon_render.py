@@ -52,7 +52,9 @@ def straight_down_view(world_name, world_color, size, cycles_samples, eevee_samp
 
 
 def test_eevee_and_cycles_render_the_baked_material():
-    from ndfbake import bake, blender_compat, native
+    from ndfbake.core import native_abi
+    from ndfbake.shading import blender_compat
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="bumps", size=64, roughness=0.35, metallic=0.5)
         tree = material.node_tree
@@ -63,7 +65,7 @@ def test_eevee_and_cycles_render_the_baked_material():
         scene = setup_scene()
         plain = {engine: render(scene, engine, os.path.join(directory, "plain-%s.exr" % engine))
                  for engine in (blender_compat.eevee_engine(), "CYCLES")}
-        for lobes in (4, native.MAX_LOBES):
+        for lobes in (4, native_abi.MAX_LOBES):
             result = bake.bake_material(material, bake.BakeSettings(max_lobes=lobes))
             h.expect(result.lobes == lobes, "%d lobes asked, %d baked" % (lobes, result.lobes))
             for engine in (blender_compat.eevee_engine(), "CYCLES"):
@@ -85,7 +87,9 @@ def test_emission_is_drawn_once_as_the_principled_draws_it():
     0.5: nearly all it renders is its emission, which the group draws once, beside the lobes,
     weighted by Alpha as the Principled weights it. Baked with 8 lobes, each engine's mean
     within 2% of the unbaked material's (EEVEE 4 TAA samples, Cycles 4 samples, 64²)."""
-    from ndfbake import bake, blender_compat, native
+    from ndfbake.core import native_abi
+    from ndfbake.shading import blender_compat
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="bumps", size=64, roughness=0.35, metallic=0.0)
         tree = material.node_tree
@@ -99,7 +103,7 @@ def test_emission_is_drawn_once_as_the_principled_draws_it():
         scene = setup_scene()
         engines = (blender_compat.eevee_engine(), "CYCLES")
         plain = {e: float(render(scene, e, os.path.join(directory, "plain-%s.exr" % e)).mean()) for e in engines}
-        bake.bake_material(material, bake.BakeSettings(max_lobes=native.MAX_LOBES))
+        bake.bake_material(material, bake.BakeSettings(max_lobes=native_abi.MAX_LOBES))
         group = material.node_tree.nodes["ndfbake"].node_tree
         emitters = [n.name for n in group.nodes if n.bl_idname == "ShaderNodeEmission"]
         h.expect(emitters == ["Emission"], "the group's emission nodes: %s" % emitters)
@@ -115,7 +119,8 @@ def test_white_furnace_keeps_the_energy_of_the_fine_normals():
     each fine normal reflects about all the light, so the filtered lobes (far-off levels) must too.
     Cycles at 64 spp and EEVEE at 16 samples, 32² pixels of about 75 texels each; the baked mean
     within 3% of the original's in each (5.0: Cycles 0.981, EEVEE Next 0.990; 3.4: 1.000, EEVEE 0.993)."""
-    from ndfbake import bake, blender_compat
+    from ndfbake.shading import blender_compat
+    from ndfbake.blender import bake
     engines = ("CYCLES", blender_compat.eevee_engine())
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory, pattern="bumps", size=64, roughness=0.15, metallic=1.0)
@@ -168,7 +173,7 @@ def test_flat_map_furnace_in_eevee_next():
     with Cycles' estimate instead 2.4% at 5°, and 2.2% at 90° before the table's slices had their
     edge columns repeated). The metal's lobes alone are EEVEE's own Principled, as the plain
     material's (1.0000 in 5.0); not drawn again here."""
-    from ndfbake import blender_compat
+    from ndfbake.shading import blender_compat
     if not blender_compat.eevee_next():
         print("  skipped: EEVEE Legacy draws Principled v1, whose lobes are whole copies")
         return
@@ -188,7 +193,7 @@ def test_eevee_film_weighting_follows_the_view_exposure():
     −0.5. Where the film weighs luma by exposure², ±0.5 render the same and darker than 0; where
     EEVEE averages its samples, all three render the same. The panel's note follows it: shown in
     EEVEE at −0.5 where the film darkens, never at 0 nor in Cycles."""
-    from ndfbake import blender_compat
+    from ndfbake.shading import blender_compat
     h.reset_scene()
     scene = bpy.context.scene
     material = bpy.data.materials.new("Checks")
@@ -240,7 +245,7 @@ def test_eevee_film_weighting_follows_the_view_exposure():
 def flat_map_furnace(engine, kinds):
     """The furnace of the two tests above in `engine`, for the materials named in `kinds` (those of
     this Principled version)."""
-    from ndfbake import bake
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         h.reset_scene()
         flat = np.zeros((16, 16, 3))

@@ -30,7 +30,8 @@ def _setting(material):
 
 def test_an_opaque_material_bakes_without_transparent_shadows():
     """Off after the bake, recorded as on; Revert restores the material exactly."""
-    from ndfbake import bake, transparent_shadow
+    from ndfbake.shading import transparent_shadow
+    from ndfbake.blender import bake
     with h.scratch_dir() as directory:
         material = h.baked_scene(directory)
         if HAS_SETTING:
@@ -52,7 +53,8 @@ def test_an_opaque_material_bakes_without_transparent_shadows():
 
 def test_a_transparent_material_keeps_them():
     """An Alpha below 1, linked, or animated at 1: the bake leaves the setting alone."""
-    from ndfbake import bake, transparent_shadow
+    from ndfbake.shading import transparent_shadow
+    from ndfbake.blender import bake
     if not HAS_SETTING:
         return
 
@@ -86,7 +88,8 @@ def test_a_rebake_follows_the_group_nodes_alpha():
     """Alpha lowered on the group node: the re-bake puts the setting back; raised to 1 again, the
     next re-bake turns it off again and still records the user's setting, which Revert restores.
     A setting the user had off stays off and is not recorded."""
-    from ndfbake import bake, transparent_shadow
+    from ndfbake.shading import transparent_shadow
+    from ndfbake.blender import bake
     if not HAS_SETTING:
         return
     with h.scratch_dir() as directory:

@@ -67,7 +67,7 @@ def _build_scene(directory):
     environment.image = bpy.data.images.load(WORLD)
     world.node_tree.links.new(environment.outputs["Color"], world.node_tree.nodes["Background"].inputs["Color"])
     scene.world = world
-    from ndfbake import blender_compat
+    from ndfbake.shading import blender_compat
     scene.render.engine = blender_compat.eevee_engine()
     scene.eevee.taa_render_samples = 16
     scene.eevee.taa_samples = 16
@@ -141,7 +141,7 @@ def _shoot():
 
 
 def _tick():
-    from ndfbake import bake
+    from ndfbake.blender import bake
     step = state["step"]
     if step == "start":
         state["dir"] = h.temp_dir()

@@ -51,7 +51,7 @@ def _install_gate():
     """Holds the worker thread of a material in state["hold"] at its first "fit" progress call
     until the main thread lets it go or the job is cancelled, so that what the test observes does not depend on how fast the
     machine fits (the progress callback runs on the worker; the modal operator on the main thread)."""
-    from ndfbake import bake_job
+    from ndfbake.core import bake_job
     original = bake_job.BakeJob.run
 
     def gated_run(self, progress=None):
@@ -112,7 +112,9 @@ def _invoke_bake(operator=None):
 
 
 def _tick():
-    from ndfbake import bake, lobe_folders, material_scan, operators
+    from ndfbake.shading import bake_record
+    from ndfbake.core import folder_names
+    from ndfbake.blender import bake, lobe_folders, operators
     state["ticks"] += 1
     step = state["step"]
     if step == "start":
@@ -268,18 +270,19 @@ def _tick():
         if operators.running_job is not None:
             return 0.05
         h.expect(all(bake.is_baked(bpy.data.materials[n]) for n in ("Window", "Second")), "Bake All did not bake both")
-        second_folder = lobe_folders.record_folder(material_scan.record(bpy.data.materials["Second"]))
+        second_folder = lobe_folders.record_folder(bake_record.record(bpy.data.materials["Second"]))
         h.expect(os.path.basename(second_folder) == "Second.ndfbake", "the cancelled bakes kept their folder names: "
                  "Second went to %s" % second_folder)
-        h.expect(not [n for n in os.listdir(state["dir"]) if n.endswith(lobe_folders.PENDING_SUFFIX)], "pending folders left")
+        h.expect(not [n for n in os.listdir(state["dir"]) if n.endswith(folder_names.PENDING_SUFFIX)], "pending folders left")
         print("Bake All from the UI baked both materials", flush=True)
         _quit_without_saving()
     return 0.05
 
 
 def _quit_without_saving():
-    from ndfbake import bake, lobe_folders, material_scan
-    folders = {name: lobe_folders.record_folder(material_scan.record(bpy.data.materials[name]))
+    from ndfbake.shading import bake_record
+    from ndfbake.blender import bake, lobe_folders
+    folders = {name: lobe_folders.record_folder(bake_record.record(bpy.data.materials[name]))
                for name in ("Window", "Second")}
     bake.revert(bpy.data.materials["Second"])
     # quit.blend goes to Blender's temporary directory: this test's, not the user's.

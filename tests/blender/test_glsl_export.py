@@ -237,7 +237,7 @@ def check_flat_specular(source):
 
 
 def check(directory):
-    from ndfbake import lobe_nodes, nodes
+    from ndfbake.shading import lobe_nodes, nodes
     normal_map = h.write_normal_map(os.path.join(directory, "fbm.png"), "fbm", 64)
     out = os.path.join(directory, "bake")
     h.bake_image_file(normal_map, out, max_lobes=4)

@@ -24,7 +24,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from ndfb_mesh import library_from_argv, MeshArrays, FRAME_NORMAL_INTERPOLATED, FRAME_NORMAL_UNIT  # noqa: E402
 from test_addon_helpers import exit_now  # noqa: E402
 from test_tangents import mirrored_suzanne  # noqa: E402
-from ndfbake import blender_compat  # noqa: E402  (ndfb_mesh put addon/ on the path)
+from ndfbake.shading import blender_compat  # noqa: E402  (ndfb_mesh put addon/ on the path)
 
 SIZE = 128
 LIMIT_DEGREES = 1.0

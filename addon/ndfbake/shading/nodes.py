@@ -9,10 +9,10 @@ material allows (specular_split.may_split: Principled v2 without coat, sheen or 
 lobe draws only the specular reflection and one base Principled draws the diffuse once at the
 texel's mean normal; elsewhere lobe j is a whole copy of the original Principled BSDF with that
 normal and roughness. The lobes use Multiscatter GGX where the original uses GGX and does not
-transmit (see _lobe_bsdf). Lobes are summed with weights α_j (each a Mix Shader of factor α_j,
+transmit (see lobe_bsdfs.lobe_bsdf). Lobes are summed with weights α_j (each a Mix Shader of factor α_j,
 then Add Shader nodes; see _weighted_sum for why not a chain of mixes). Every other Principled
 input (linked or not) is carried over through the group's inputs; the emission is drawn once
-beside the lobes (_emission). A material whose fit needs one lobe gets a one-lobe group (nothing to
+beside the lobes (lobe_bsdfs.emission). A material whose fit needs one lobe gets a one-lobe group (nothing to
 sum): the group is built for the lobe slots the bake wrote.
 
 The group has two shader outputs, each with its own lobes: BSDF (Cycles, and both engines where
@@ -25,12 +25,12 @@ except with an atlas where EEVEE never draws BSDF: then BSDF's lobes have their 
 Linear lookup a level instead of EEVEE's four Closest ones (lod_nodes).
 
 OSL: where Cycles runs OSL on the CPU, a bake may draw Cycles' lobes through one Script node
-instead (osl_group.py); `osl_status()` says where. The stock-node group works in both engines.
+instead (osl_group.py); `osl_group.status()` says where. The stock-node group works in both engines.
 """
 import bpy
 
-from . import blender_compat, lobe_nodes, lod_nodes, material_scan, specular_split
-from .node_builders import TAG, _add_socket, _new_group, _vmath, socket_value
+from . import blender_compat, lobe_bsdfs, lobe_nodes, lod_nodes, material_scan, specular_split
+from .node_builders import TAG, _add_socket, _new_group, socket_value
 
 # Shared groups of earlier versions of this add-on, removed with the last bake using them: version
 # 2's, and the specular split's groups that drew Karis's fit of the layer's albedo and then Cycles'
@@ -63,49 +63,6 @@ def default_grazing_narrowing():
             EEVEE_BSDF: 0.0 if blender_compat.eevee_next() else EEVEE_LEGACY_GRAZING_NARROWING}
 
 
-
-# Principled inputs the lobe group computes itself rather than passing through.
-COMPUTED_INPUTS = {"Normal", "Roughness"}
-
-
-def emission_inputs():
-    """Principled inputs the group draws once, beside the lobes, rather than in every lobe
-    (_emission): the emission colour (blender_compat.principled_input) and strength."""
-    return {blender_compat.principled_input("Emission"), "Emission Strength"}
-
-
-EMISSION_ALPHA = "Emission Alpha"    # the group's Mix Shader that weights the emission by Alpha
-# The specular split (specular_split.py): its node, the base BSDFs and the Mix Shaders of the Alpha
-# (one of each per output: "<BASE_BSDF> BSDF", "<BASE_BSDF> EEVEE BSDF"...).
-SPECULAR_SPLIT, BASE_BSDF, ALPHA_MIX = "Specular Split", "Base BSDF", "Alpha"
-# What a specular-only lobe takes from the group, by kind; the rest of its Principled stays at the
-# default (coat, sheen, subsurface and transmission off).
-_SHARED_LOBE_INPUTS = {"Anisotropic", "Anisotropic Rotation", "Tangent", "Specular Tint", "Thin Film Thickness",
-                       "Thin Film IOR"}
-SPECULAR_LOBE_INPUTS = {specular_split.CONDUCTOR: _SHARED_LOBE_INPUTS | {"Base Color"},
-                        specular_split.DIELECTRIC: _SHARED_LOBE_INPUTS | {"IOR", "Specular IOR Level"}}
-# What the base sets itself rather than take from the group.
-BASE_SET_INPUTS = {"Base Color", "Metallic", "Specular IOR Level", "Alpha"}
-# Principled inputs at the value that leaves a closure out of EEVEE's shader (Metallic 1: the
-# diffuse, subsurface and refraction; coat, sheen, subsurface, transmission 0; Alpha 1: the
-# transparency). EEVEE (Legacy and Next) reads the value only of an unlinked socket and compiles
-# every closure a linked one may turn on, so a whole-copy lobe linked to the group's inputs cost
-# what a plain Principled with all of them on costs: in 3.4's EEVEE Legacy the metal demo at 4
-# lobes took 2.2x a plain frame, 1.6-1.8x with these unlinked, the image the same to the bit
-# (docs/speed.md, "EEVEE Legacy"). Cycles folds such constants itself. Principled v1's names and
-# v2's (4.0+) side by side: a Principled has one of each.
-CLOSURE_OFF_VALUES = {"Metallic": 1.0, "Alpha": 1.0, "Clearcoat": 0.0, "Coat Weight": 0.0, "Sheen": 0.0,
-                      "Sheen Weight": 0.0, "Subsurface": 0.0, "Subsurface Weight": 0.0, "Transmission": 0.0,
-                      "Transmission Weight": 0.0}
-
-
-def osl_status(scene=None):
-    """(available, message) for the OSL Script variant of the group (osl_group.py): in this build,
-    or with `scene` also with its Cycles settings."""
-    from . import osl_group  # imports this module
-    return osl_group.status(scene) if scene is not None else osl_group.build_status()
-
-
 def material_group_name(material_name):
     """The name a bake gives a material's group: "NDFB <material>" (cut to fit, .001… where taken)."""
     return "NDFB " + material_name
@@ -114,40 +71,6 @@ def material_group_name(material_name):
 def lobe_image_name(material_name, j):
     """(body, tail) of the name of the image of a material's lobe slot j (id_names): "<material> lobe j"."""
     return material_name, " lobe %d" % j
-
-
-def carried_inputs(principled, current=None):
-    """Principled inputs passed through the group: every enabled input except Normal; the
-    implicit-default vectors (Clearcoat Normal, Tangent) only when linked (not muted: a muted link
-    renders as that default), since a group input cannot reproduce their "use the geometry"
-    default. `current`: see held_input."""
-    carried = []
-    for socket in principled.inputs:
-        if not socket.enabled or socket.name == "Normal":
-            continue
-        if socket.hide_value and material_scan.live_link(held_input(socket, current, socket.name)) is None:
-            continue
-        carried.append(socket)
-    return carried
-
-
-def closure_off_inputs(holder):
-    """{input name: value} of the CLOSURE_OFF_VALUES that `holder` (the Principled, or the group
-    node of the bake a re-bake replaces) holds at that value with nothing to change it (no live
-    link, no animation): a whole-copy lobe takes these as constants, not from the group's inputs.
-    Like the specular split (specular_split.lobe_kind), read when the group is built: a coat or a
-    transmission set on the group node after the bake shows once the material is baked again."""
-    return {name: value for name, value in CLOSURE_OFF_VALUES.items()
-            if material_scan.constant_input(holder, name) == value}
-
-
-def held_input(socket, current, name):
-    """The socket that holds `socket` (a Principled input, or the Normal Map's Strength) as the
-    user edits it now: `current`'s input `name` where `current`, the group node of the bake a
-    re-bake replaces, has one; else `socket` itself."""
-    if current is not None and name in current.inputs:
-        return current.inputs[name]
-    return socket
 
 
 def build_material_group(name, principled, normal_map, image_texture, lobe_images, atlas=None, lod=None,
@@ -165,15 +88,15 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     replaces, which holds the Principled's inputs (held_input)."""
     tree = _new_group(name)
     decode = lobe_nodes.lobe_group()
-    carried = carried_inputs(principled, current)
+    carried = lobe_bsdfs.carried_inputs(principled, current)
     # Not where the material transmits: Blender's Principled BSDF with Multiscatter GGX has no
     # Transmission Roughness (Cycles' multiscatter glass takes Roughness), so rough glass would
     # turn sharp; the lobes keep the original GGX there.
-    multiscatter = principled.distribution == "GGX" and not transmits(principled if current is None else current)
+    multiscatter = principled.distribution == "GGX" and not lobe_bsdfs.transmits(principled if current is None else current)
     for socket in carried:
         iface = _add_socket(tree, "INPUT", socket.bl_idname, socket.name)
         try:
-            iface.default_value = socket_value(held_input(socket, current, socket.name))
+            iface.default_value = socket_value(lobe_bsdfs.held_input(socket, current, socket.name))
         except (AttributeError, TypeError):
             pass
     strength = _add_socket(tree, "INPUT", "NodeSocketFloat", "Normal Strength")
@@ -200,7 +123,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     holder = principled if current is None else current
     # Specular-only lobes over one base (specular_split), or whole copies (kind None).
     kind = specular_split.lobe_kind(holder) if specular_split.may_split(principled, holder) else None
-    constants = closure_off_inputs(holder) if kind is None else {}
+    constants = lobe_bsdfs.closure_off_inputs(holder) if kind is None else {}
 
     # The outputs whose lobe BSDFs the group builds: (y offset of a lobe's BSDF, y of the sum).
     layout = ({"BSDF": (0, -200)} if cycles_lobes is not None else {}) | {EEVEE_BSDF: (-450, -500)}
@@ -241,7 +164,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
                 tree.links.new(gin.outputs["Roughness"], dec.inputs["Roughness"])
             moments[read].append(dec.outputs["Moment"])
             weights[read].append(dec.outputs["Weight"])
-            lobes[read] = dec, _normal_map(tree, gin, normal_map, dec.outputs["Normal"], (-550, y + dy - 150))
+            lobes[read] = dec, lobe_bsdfs.normal_map_node(tree, gin, normal_map, dec.outputs["Normal"], (-550, y + dy - 150))
 
         for output, (dy, _) in layout.items():
             dec, nm = lobes[reads[output]]
@@ -250,17 +173,19 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
             if constant:
                 roughness = _grazing_roughness(tree, gin, dec, nm, names, "Grazing %d %s" % (j, output),
                                                constant, (-300, y + dy - 150))
-            shaders[output].append(_lobe_bsdf(tree, gin, principled, carried, roughness, nm,
+            shaders[output].append(lobe_bsdfs.lobe_bsdf(tree, gin, principled, carried, roughness, nm,
                                               "Lobe %d %s" % (j, output), (0, y + dy), multiscatter, kind,
                                               constants))
 
     x_end = 1000 + 200 * count
-    emission = _emission(tree, gin, (x_end, -900))
+    emission = lobe_bsdfs.emission(tree, gin, (x_end, -900))
     bases = {}
     if kind in (specular_split.DIELECTRIC, specular_split.BOTH):
         for k, read in enumerate(dict.fromkeys(reads.values())):
-            bases |= _base_bsdfs(tree, gin, principled, carried, normal_map, moments[read], names,
-                                 [output for output in layout if reads[output] == read], (x_end, 600 + 1400 * k))
+            diffuse = {output: specular_split.EEVEE_DIFFUSE if output == EEVEE_BSDF else specular_split.CYCLES_DIFFUSE
+                       for output in layout if reads[output] == read}
+            bases |= lobe_bsdfs.base_bsdfs(tree, gin, principled, carried, normal_map, moments[read], names, diffuse,
+                                           (x_end, 600 + 1400 * k))
     sums = {}
     for output, lobes in shaders.items():
         y = layout[output][1]
@@ -268,7 +193,7 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
         if output in bases:
             total = _add_shader(tree, total, bases[output], (x_end + 200, y))
         if kind is not None:  # split lobes carry no Alpha: the group mixes the transparency in once
-            total = _alpha_over(tree, gin, total, "%s %s" % (ALPHA_MIX, output), (x_end + 400, y))
+            total = _alpha_over(tree, gin, total, "%s %s" % (lobe_bsdfs.ALPHA_MIX, output), (x_end + 400, y))
         sums[output] = _add_shader(tree, total, emission, (x_end + 600, y))
     tree.links.new(sums[EEVEE_BSDF], gout.inputs[EEVEE_BSDF])
     if "BSDF" in sums:
@@ -319,149 +244,6 @@ def _alpha_over(tree, gin, shader, name, location):
     tree.links.new(transparent.outputs["BSDF"], mix.inputs[1])
     tree.links.new(shader, mix.inputs[2])
     return mix.outputs["Shader"]
-
-
-def _normal_map(tree, gin, normal_map, color, location):
-    """A tangent-space Normal Map node like the original's (UV map, the group's Normal Strength) of
-    `color`; returns its Normal output."""
-    nm = tree.nodes.new("ShaderNodeNormalMap")
-    nm.space = "TANGENT"
-    nm.uv_map = normal_map.uv_map
-    nm.location = location
-    tree.links.new(color, nm.inputs["Color"])
-    tree.links.new(gin.outputs["Normal Strength"], nm.inputs["Strength"])
-    return nm.outputs["Normal"]
-
-
-def _base_bsdfs(tree, gin, principled, carried, normal_map, moments, names, outputs, location):
-    """The Principled BSDFs that draw the material's diffuse (and subsurface) beneath the lobes
-    (specular_split), one per group output in `outputs`, each darkened as its engine darkens a
-    Principled's diffuse under its specular (Cycles' for BSDF, EEVEE Next's for EEVEE BSDF): at the
-    texel's mean normal, normalize(Σ_j α_j·r_j + 1e-5·ẑ) (+Z where the moments cancel), the original
-    roughness, no specular of their own, opaque (the group mixes the Alpha in once: _alpha_over).
-    Returns {output: its base's BSDF}."""
-    total = moments[0]
-    for k, moment in enumerate(moments[1:], 1):
-        total = _vmath(tree, "ADD", total, moment, location=(location[0] - 1200 + 100 * k, location[1] + 300))
-    mean = _vmath(tree, "NORMALIZE", _vmath(tree, "ADD", total, (0.0, 0.0, 1e-5), location=(location[0] - 600,
-                                                                                             location[1] + 300)),
-                  location=(location[0] - 450, location[1] + 300))
-    color = _vmath(tree, "MULTIPLY_ADD", mean, (0.5, 0.5, 0.5), (0.5, 0.5, 0.5),
-                   location=(location[0] - 300, location[1] + 300))
-    normal = _normal_map(tree, gin, normal_map, color, (location[0] - 150, location[1] + 300))
-    split = tree.nodes.new("ShaderNodeGroup")
-    split.node_tree = specular_split.specular_split_group()
-    split.name = split.label = SPECULAR_SPLIT
-    split.location = (location[0] - 150, location[1] - 300)
-    for key in specular_split.SPLIT_INPUTS:
-        if key in names:
-            tree.links.new(gin.outputs[key], split.inputs[key])
-    tree.links.new(normal, split.inputs["Normal"])
-    split.inputs["Multiscatter"].default_value = specular_split.multiscatter(principled)
-
-    bases = {}
-    skipped = COMPUTED_INPUTS | emission_inputs() | BASE_SET_INPUTS
-    for k, output in enumerate(outputs):
-        bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
-        bsdf.name = bsdf.label = "%s %s" % (BASE_BSDF, output)
-        bsdf.distribution = principled.distribution
-        bsdf.subsurface_method = principled.subsurface_method
-        bsdf.location = (location[0], location[1] + 700 * k)
-        for socket in carried:
-            if socket.name in skipped:
-                continue
-            tree.links.new(gin.outputs[socket.name], bsdf.inputs[socket.identifier])
-        diffuse = specular_split.EEVEE_DIFFUSE if output == EEVEE_BSDF else specular_split.CYCLES_DIFFUSE
-        tree.links.new(split.outputs[diffuse], bsdf.inputs["Base Color"])
-        bsdf.inputs["Metallic"].default_value = 0.0
-        bsdf.inputs["Specular IOR Level"].default_value = 0.0
-        bsdf.inputs["Emission Strength"].default_value = 0.0
-        tree.links.new(normal, bsdf.inputs["Normal"])
-        if "Roughness" in gin.outputs:
-            tree.links.new(gin.outputs["Roughness"], bsdf.inputs["Roughness"])
-        bases[output] = bsdf.outputs["BSDF"]
-    return bases
-
-
-def _emission(tree, gin, location):
-    """The Principled's emission, drawn once: an Emission shader of the carried Color and
-    Strength, weighted by the carried Alpha (a Principled mixes a Transparent BSDF over all it
-    draws, its emission too). Every lobe drawing α_j of it would sum to the same light, but in
-    Cycles each lobe's Principled then grows its own emission branch, which costs about 32
-    floats of the 255-float shader stack per lobe where Emission is linked (measured with
-    Cycles' --debug-cycles summary: 134 at 4 lobes, 230 at 7; 8 overflowed, drawing the
-    material black). The Principled always has the emission colour (blender_compat's name), Emission
-    Strength and Alpha, and carried_inputs always carries them."""
-    node = tree.nodes.new("ShaderNodeEmission")
-    node.name = node.label = "Emission"
-    node.location = location
-    tree.links.new(gin.outputs[blender_compat.principled_input("Emission")], node.inputs["Color"])
-    tree.links.new(gin.outputs["Emission Strength"], node.inputs["Strength"])
-    alpha = tree.nodes.new("ShaderNodeMixShader")
-    alpha.name = alpha.label = EMISSION_ALPHA
-    alpha.location = (location[0] + 200, location[1])
-    tree.links.new(gin.outputs["Alpha"], alpha.inputs["Fac"])
-    tree.links.new(node.outputs["Emission"], alpha.inputs[2])
-    return alpha.outputs["Shader"]
-
-
-def _lobe_bsdf(tree, gin, principled, carried, roughness, normal, name, location, multiscatter, kind=None,
-               constants=None):
-    """Lobe j's shader: a copy of the original Principled BSDF with the lobe's normal and roughness,
-    emitting nothing (the group draws the emission once: _emission), taking `constants` (input name:
-    value, closure_off_inputs) as values rather than from the group; with a specular_split kind,
-    only its specular reflection: the metal's (CONDUCTOR), the dielectric layer's over black
-    (DIELECTRIC), or both mixed by Metallic (BOTH)."""
-    if kind == specular_split.BOTH:
-        mix = tree.nodes.new("ShaderNodeMixShader")
-        mix.name = mix.label = name + " Metallic"
-        mix.location = (location[0] + 200, location[1])
-        tree.links.new(gin.outputs["Metallic"], mix.inputs["Fac"])
-        for slot, part in ((1, specular_split.DIELECTRIC), (2, specular_split.CONDUCTOR)):
-            tree.links.new(_lobe_bsdf(tree, gin, principled, carried, roughness, normal,
-                                      name if part == specular_split.CONDUCTOR else name + " Dielectric",
-                                      (location[0], location[1] - 300 * (slot - 1)), multiscatter, part),
-                           mix.inputs[slot])
-        return mix.outputs["Shader"]
-    bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
-    bsdf.name = bsdf.label = name
-    # Multiple scattering: a widened GGX lobe loses the energy of light scattered more than
-    # once between its microfacets, which the fine normals it stands for, each as narrow as
-    # the original, hardly lose (white furnace, roughness 0.15: 0.81-0.86 of the reference
-    # with GGX lobes, 0.88-0.98 with Multiscatter GGX). Same as GGX for narrow lobes. Not where
-    # the material transmits (build_material_group).
-    bsdf.distribution = "MULTI_GGX" if multiscatter else principled.distribution
-    bsdf.subsurface_method = principled.subsurface_method
-    bsdf.location = location
-    skipped = COMPUTED_INPUTS | emission_inputs()
-    for socket in carried:
-        if socket.name in skipped:
-            continue
-        if kind is not None and socket.name not in SPECULAR_LOBE_INPUTS[kind]:
-            continue
-        if constants and socket.name in constants:
-            bsdf.inputs[socket.identifier].default_value = constants[socket.name]
-            continue
-        tree.links.new(gin.outputs[socket.name], bsdf.inputs[socket.identifier])
-    if kind == specular_split.CONDUCTOR:
-        bsdf.inputs["Metallic"].default_value = 1.0
-    elif kind == specular_split.DIELECTRIC:
-        bsdf.inputs["Metallic"].default_value = 0.0
-        bsdf.inputs["Base Color"].default_value = (0.0, 0.0, 0.0, 1.0)  # no diffuse: the base draws it
-    bsdf.inputs["Emission Strength"].default_value = 0.0  # the group emits once (_emission)
-    tree.links.new(roughness, bsdf.inputs["Roughness"])
-    tree.links.new(normal, bsdf.inputs["Normal"])
-    return bsdf.outputs["BSDF"]
-
-
-def transmits(node):
-    """Whether the transmission of a Principled BSDF (or of the group node that holds its inputs
-    since a bake) may matter: Transmission or Transmission Roughness linked (live), animated or
-    non-zero. Read when the group is built: a transmission set on the group node after the bake
-    shows once the material is baked again."""
-    # Principled v2 (Blender 4.0+) has no Transmission Roughness: transmission takes Roughness.
-    names = (blender_compat.principled_input(name) for name in ("Transmission", "Transmission Roughness"))
-    return any(material_scan.input_may_matter(node, name) for name in names if name)
 
 
 def _weighted_sum(tree, shaders, weights, y):

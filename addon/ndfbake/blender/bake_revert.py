@@ -12,8 +12,9 @@ transparent_shadow, bake_job (BakeError). Called by: bake.
 """
 import bpy
 
-from . import group_node, lobe_folders, material_scan, node_builders, nodes, osl_group, transparent_shadow
-from .bake_job import BakeError
+from ..shading import bake_record, group_node, node_builders, nodes, osl_group, transparent_shadow
+from . import lobe_folders
+from ..core.bake_job import BakeError
 
 
 def remove_nodes(material, rec, keep_edits=True):
@@ -42,7 +43,7 @@ def remove_images(names):
 def revert(material):
     """Restores the material as it was before the bake. Its lobe folder stays for Ctrl-Z (when it
     goes: lobe_folders.py). Returns (the folder, [names of the other materials that use it])."""
-    rec = material_scan.record(material) if material is not None else None
+    rec = bake_record.record(material) if material is not None else None
     if rec is None:
         raise BakeError("NOT_BAKED", "material '%s' has no ndfbake bake to revert" % (
             material.name if material is not None else ""))
@@ -54,5 +55,5 @@ def revert(material):
     osl_group.remove_unused_text()
     remove_images(rec.get("images", []))
     transparent_shadow.restore(material, rec)
-    del material[material_scan.RECORD_KEY]
+    del material[bake_record.RECORD_KEY]
     return folder, [m.name for m in lobe_folders.folder_users(folder)] if folder else []

@@ -5,9 +5,11 @@ edits carried back. Works on the user's node tree only; the group's inside is no
 """
 from dataclasses import dataclass, field
 
-from . import id_names, material_scan, node_animation
+from ..core import id_names
+from . import bake_record, material_scan, node_animation
 from .node_builders import GROUP_VERSION, TAG, socket_value
-from .nodes import EEVEE_BSDF, held_input, lobe_count
+from .lobe_bsdfs import held_input
+from .nodes import EEVEE_BSDF, lobe_count
 
 EEVEE_OUTPUT = "ndfbake EEVEE Output"   # the Material Output (target EEVEE) a bake may add
 GROUP_NODE_OFFSET = 250               # the group node sits this far above its Principled BSDF
@@ -125,9 +127,9 @@ def replace_group_node(material_tree, group_tree, principled, normal_map, image_
     in the tree, untouched otherwise, until commit_replacement; undo_replacement puts the material
     back exactly as it was (as on any error here). Keyframes and drivers of old's inputs, which go
     by node name, move at the commit, and so does the role of `eevee_output`, old's EEVEE output
-    node (material_scan.recorded_targets finds it), or None. Returns a Replacement."""
+    node (bake_record.recorded_targets finds it), or None. Returns a Replacement."""
     replacement = Replacement(node="", old=old.name, principled=principled.name, normal_map=normal_map.name,
-                              roles={n.name: n.get(material_scan.ROLE_KEY) for n in (principled, normal_map)},
+                              roles={n.name: n.get(bake_record.ROLE_KEY) for n in (principled, normal_map)},
                               had_animation=material_tree.animation_data is not None,
                               eevee_output=eevee_output.name if eevee_output is not None else "")
     node = material_tree.nodes.new("ShaderNodeGroup")
@@ -161,9 +163,9 @@ def undo_replacement(material_tree, replacement):
         if marked is None:
             continue
         if role is not None:
-            marked[material_scan.ROLE_KEY] = role
-        elif material_scan.ROLE_KEY in marked.keys():
-            del marked[material_scan.ROLE_KEY]
+            marked[bake_record.ROLE_KEY] = role
+        elif bake_record.ROLE_KEY in marked.keys():
+            del marked[bake_record.ROLE_KEY]
     if node is not None:
         node_animation.remove_node_animation(material_tree, node.name, clear_empty=not replacement.had_animation)
         nodes.remove(node)
@@ -178,7 +180,7 @@ def commit_replacement(material_tree, replacement):
     nodes = material_tree.nodes
     node, old = nodes[replacement.node], nodes[replacement.old]
     principled, normal_map = nodes[replacement.principled], nodes[replacement.normal_map]
-    old_key = material_scan.role_key(old)
+    old_key = bake_record.role_key(old)
     carried_by_old, pairs = set(), []
     for _, shared in _shared_inputs(node, principled, normal_map):
         for j in shared.values():
@@ -193,11 +195,11 @@ def commit_replacement(material_tree, replacement):
     node_animation.remove_node(material_tree, old)
     new_key = node.name
     node.name = group_node_name(material_tree, node, keys=(new_key, old_key))
-    material_scan.rekey_roles(material_tree, (new_key, old_key), node.name)
+    bake_record.rekey_roles(material_tree, (new_key, old_key), node.name)
     # Rekeyed above where it carries old's role; a record older than roles found it by name alone.
     # "" where the bake added no EEVEE output, or it is gone or ambiguous (recorded_node).
     if replacement.eevee_output:
-        nodes[replacement.eevee_output][material_scan.ROLE_KEY] = material_scan.node_role("eevee_output", node.name)
+        nodes[replacement.eevee_output][bake_record.ROLE_KEY] = bake_record.node_role("eevee_output", node.name)
     return node
 
 
@@ -217,7 +219,7 @@ def add_eevee_output(material_tree, node, bypassed):
     try:
         eevee.name = eevee.label = EEVEE_OUTPUT
         eevee[TAG] = GROUP_VERSION
-        eevee[material_scan.ROLE_KEY] = material_scan.node_role("eevee_output", node.name)
+        eevee[bake_record.ROLE_KEY] = bake_record.node_role("eevee_output", node.name)
         eevee.target = "EEVEE"
         eevee.parent = output.parent
         eevee.location = (output.location.x, output.location.y - 220)
@@ -265,15 +267,15 @@ def eevee_draws_own_output(material_tree, principled, replacing=None):
 
 def group_node_name(material_tree, node, keys=()):
     """The name a bake gives its group node `node`: GROUP_NODE_NAME, with .001, .002… where another
-    node has that name or carries it as its role key (material_scan.role_key), other than the
+    node has that name or carries it as its role key (bake_record.role_key), other than the
     `keys` whose roles `node` takes over. The name becomes the key of the node's roles, which must
     be no other bake's: a group node the user renamed keeps the key it was made with, and its
     nodes are still in the tree when the new ones are named (a target a re-bake drops goes after
     commit_replacement); sharing the key, each would be found for the other (recorded_node) and
     rekeyed with it."""
     taken = {n.name: n for n in material_tree.nodes}
-    taken.update((material_scan.role_key(n), None) for n in material_tree.nodes
-                 if n != node and material_scan.role_key(n) not in keys)
+    taken.update((bake_record.role_key(n), None) for n in material_tree.nodes
+                 if n != node and bake_record.role_key(n) not in keys)
     return id_names.free(taken, GROUP_NODE_NAME, own=node)
 
 
@@ -290,7 +292,7 @@ def _wire_group_node(material_tree, node, group_tree, principled, normal_map, im
         node.name = group_node_name(material_tree, node)
     node[TAG] = GROUP_VERSION
     for role, marked in (("group", node), ("principled", principled), ("normal_map", normal_map)):
-        marked[material_scan.ROLE_KEY] = material_scan.node_role(role, node.name)
+        marked[bake_record.ROLE_KEY] = bake_record.node_role(role, node.name)
     node.label = "ndfbake: %d lobe%s" % (lobe_count(group_tree), "" if lobe_count(group_tree) == 1 else "s")
     placed = replacing if replacing is not None else principled
     node.location = (placed.location.x, placed.location.y + (0 if replacing is not None else GROUP_NODE_OFFSET))
@@ -347,14 +349,14 @@ def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee
     come back. With keep_edits, the node's inputs go back to the Principled (write_back_inputs;
     not when undoing a half-built insert, where only driver variables that insert pointed at the
     node read the Principled again). Then the group node goes. The nodes are found by their roles
-    (material_scan.recorded_node), renamed or not; a Principled deleted since the bake is made
+    (bake_record.recorded_node), renamed or not; a Principled deleted since the bake is made
     again (with `settings`, principled_settings(), and its Normal from the Normal Map node).
     Returns the group tree it used (or None)."""
     nodes = material_tree.nodes
     key = node_name
 
     def find(name, role):
-        return material_scan.recorded_node(material_tree, name, material_scan.node_role(role, key))
+        return bake_record.recorded_node(material_tree, name, bake_record.node_role(role, key))
 
     added = find(eevee_output, "eevee_output") if eevee_output else None
     if added is not None and added.get(TAG) is not None:
@@ -391,5 +393,5 @@ def remove_group_node(material_tree, node_name, principled_name, bypassed, eevee
             material_tree.links.new(principled.outputs["BSDF"], socket).is_muted = muted
     if node is not None:
         node_animation.remove_node(material_tree, node)
-    material_scan.clear_roles(material_tree, key)
+    bake_record.clear_roles(material_tree, key)
     return group_tree

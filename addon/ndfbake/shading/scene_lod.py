@@ -40,7 +40,8 @@ try:
 except ImportError:  # native.status() says so in the panel; nothing here runs without the library
     np = None
 
-from . import material_scan, native
+from ..core import native
+from . import material_scan
 
 # Grazing views stretch the footprint without bound; past 1/64 (an 89° view) the stretch is
 # capped (at 64×, six levels, with STRETCH = 1) so that silhouettes keep some detail.

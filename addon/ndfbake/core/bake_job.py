@@ -2,21 +2,18 @@
 
     job = bake.prepare(material, settings)   # main thread (bake.py): a BakeJob
     job.run()  or  job.start() / job.done    # here, on any thread: the library fits and writes
-    bake.finish(job)                         # main thread (bake.py): commit_pending() first
+    bake.finish(job)                         # main thread (bake.py): lobe_folders.commit_pending() first
 
 No bpy here, so that the thread rule can be seen: run() and start()'s worker read only the job's
 own fields (the pixels prepare() decoded, paths, settings) and call only native.py and
-lobe_folders.delete_bake_files (plain file removal). commit_pending() and discard_pending() move or
-delete the pending folder and keep lobe_folders' books; they run on the main thread (finish(), the
-operators, bake.bake_material).
-
-May call: native, lobe_folders. Called by: bake, bake_revert (BakeError), operators (the job API).
+folder_names.delete_bake_files (plain file removal). blender/lobe_folders.py's commit_pending() and
+discard_pending() move or delete the pending folder on the main thread.
 """
 import os
 import threading
 import time
 
-from . import lobe_folders, native
+from . import folder_names, native, native_abi
 
 # Weights of the library's progress stages in the overall fraction (each reports 0..1); Blender
 # decodes the map in prepare(), before the job starts.
@@ -106,7 +103,7 @@ class BakeJob:
         start = time.perf_counter()
         try:
             if self._cancel.is_set():
-                raise native.Error(native.ERROR_CANCELLED, "NDFB_ERROR_CANCELLED", "cancelled before it started")
+                raise native.Error(native_abi.ERROR_CANCELLED, "NDFB_ERROR_CANCELLED", "cancelled before it started")
             p = self.pixels
             with lib.context() as ctx, ctx.normal_map(p.data, p.width, p.height, p.channels, p.signed) as normal_map:
                 ctx.bake(normal_map, self.out_dir, source_name=self.image_path, max_lobes=self.settings.max_lobes,
@@ -116,7 +113,7 @@ class BakeJob:
                          atlas=self.lod is not None, mipmap=self.settings.shader == "OSL")
         except native.Error as e:
             if not existed:
-                lobe_folders.delete_bake_files(self.out_dir, [])  # the empty folder, if the library left it
+                folder_names.delete_bake_files(self.out_dir, [])  # the empty folder, if the library left it
             raise _bake_error(e, self) from None
         finally:
             self.seconds = time.perf_counter() - start
@@ -142,33 +139,10 @@ class BakeJob:
 
 def _bake_error(error, job):
     name = job.material_name
-    if error.status == native.ERROR_CANCELLED:
+    if error.status == native_abi.ERROR_CANCELLED:
         return BakeError("CANCELLED", "bake of '%s' cancelled: no file and no node changed" % name)
-    if error.status == native.ERROR_IO:
+    if error.status == native_abi.ERROR_IO:
         return BakeError("OUTPUT_NOT_WRITABLE", "cannot write the lobe folder %s: %s" % (job.final_dir, error.message))
-    if error.status == native.ERROR_OUT_OF_MEMORY:
+    if error.status == native_abi.ERROR_OUT_OF_MEMORY:
         return BakeError("TOO_LARGE", error.message)
     return BakeError("NATIVE_ERROR", "%s (%s)" % (error.message, error.status_name))
-
-
-def commit_pending(job):
-    """Renames a pending job's folder into its lobe folder (new: lobe_folders.new_folder)."""
-    if job.out_dir == job.final_dir:
-        return
-    try:
-        os.rename(job.out_dir, job.final_dir)
-    except OSError as e:
-        raise BakeError("OUTPUT_NOT_WRITABLE", "cannot move the lobe textures of '%s' into %s: %s"
-                        % (job.material_name, job.final_dir, e.strerror)) from None
-    job.out_dir = job.final_dir
-    lobe_folders.created(job.final_dir)
-    lobe_folders.filled(job.folder)
-    lobe_folders.release(job.final_dir)
-
-
-def discard_pending(job):
-    """Deletes what a pending job wrote (nothing else: only its own files in its own folder) and
-    gives its folder name back."""
-    if job.out_dir != job.final_dir and os.path.isdir(job.out_dir):
-        lobe_folders.delete_bake_files(job.out_dir, os.listdir(job.out_dir))
-    lobe_folders.release(job.final_dir)

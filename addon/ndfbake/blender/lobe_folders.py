@@ -31,17 +31,16 @@ script with bpy.data.libraries.write is no save to Blender's handlers: save the 
 folders) before the session closes, or a background session deletes folders it uses.
 """
 import atexit
-import hashlib
 import os
-import re
 
 import bpy
 from bpy.app.handlers import persistent
 
-from . import material_scan
+from ..core.bake_job import BakeError
+from ..core.folder_names import (FOLDER_SUFFIX, PENDING_SUFFIX, delete_bake_files, folder_name, path_key,
+                                 taken_on_disk)
+from ..shading import bake_record, material_scan
 
-FOLDER_SUFFIX = ".ndfbake"
-PENDING_SUFFIX = ".pending"
 # Bounds the search for a free folder: that many versions of one material on disk at once means
 # something else is wrong (a folder that cannot be deleted), and the user should hear of it.
 MAX_FOLDER_VERSIONS = 100
@@ -49,37 +48,6 @@ MAX_FOLDER_VERSIONS = 100
 
 class FolderError(Exception):
     """No folder name is free (see new_folder)."""
-
-
-# The names Windows keeps for devices, whatever their case and extension ("CON", "nul.001",
-# "Com1.x"): no folder can be named so there (a bake into "NUL.ndfbake" would even write nowhere),
-# and a .blend may move to Windows with its folders.
-_WINDOWS_DEVICE = re.compile(r"(CON|PRN|AUX|NUL|COM[0-9]|LPT[0-9])(?=\.|$)", re.IGNORECASE)
-
-
-def safe_name(name):
-    """`name` as a folder name on any system: characters outside [A-Za-z0-9_.-] become '_', no dot
-    at either end (Windows drops trailing dots), '_' after a Windows device name ("CON_.001")."""
-    safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip(".") or "material"
-    return _WINDOWS_DEVICE.sub(r"\1_", safe, count=1) if _WINDOWS_DEVICE.match(safe) else safe
-
-
-def folder_name(name, version=1):
-    """'<name>.ndfbake', with '~<hash of the exact name>' where safe_name changed it ('~' never
-    survives safe_name, so no other name's folder looks the same), and '~<version>' from 2 up."""
-    safe = safe_name(name)
-    if safe != name:
-        safe += "~" + hashlib.sha1(name.encode("utf-8")).hexdigest()[:8]
-    return safe + ("~%d" % version if version > 1 else "") + FOLDER_SUFFIX
-
-
-def _key(path):
-    return os.path.normcase(os.path.normpath(os.path.abspath(path))).casefold()
-
-
-def is_bake_file(name):
-    return name in ("report.json", "ndfbake.glsl") or re.fullmatch(
-        r"level\d+_(lobe|color)\d+\.exr|(atlas|mip)_lobe\d+\.exr", name) is not None
 
 
 def record_folder(rec):
@@ -98,8 +66,8 @@ def folder_users(folder, but=None):
     """The materials, other than `but`, whose bake is in `folder` (absolute)."""
     users = []
     for material in bpy.data.materials:
-        rec = material_scan.record(material) if material is not but else None
-        if rec and _key(record_folder(rec)) == _key(folder):
+        rec = bake_record.record(material) if material is not but else None
+        if rec and path_key(record_folder(rec)) == path_key(folder):
             users.append(material)
     return users
 
@@ -113,16 +81,6 @@ _reserved = set()  # keys of the folders of prepared bakes not yet finished or d
 _filled = set()
 
 
-def _taken_on_disk(absolute):
-    parent = os.path.dirname(absolute)
-    try:
-        names = {name.casefold() for name in os.listdir(parent)}
-    except OSError:
-        return False  # the bake will say why it cannot write there
-    base = os.path.basename(absolute).casefold()
-    return base in names or (base + PENDING_SUFFIX).casefold() in names
-
-
 def new_folder(material):
     """('//…ndfbake', absolute path) for a new bake of `material`, reserved until release(); the
     absolute path is '' for an unsaved .blend. Raises FolderError when none is free."""
@@ -131,16 +89,16 @@ def new_folder(material):
     for version in range(1, MAX_FOLDER_VERSIONS + 1):
         relative = "//" + folder_name(material.name, version)
         absolute = os.path.normpath(bpy.path.abspath(relative))
-        if _key(absolute) not in _reserved and relative.casefold() not in _filled and \
-                not _taken_on_disk(absolute) and not folder_users(absolute):
-            _reserved.add(_key(absolute))
+        if path_key(absolute) not in _reserved and relative.casefold() not in _filled and \
+                not taken_on_disk(absolute) and not folder_users(absolute):
+            _reserved.add(path_key(absolute))
             return relative, absolute
     raise FolderError("%d lobe folders of '%s' are in the way beside the .blend (%s …): remove those no .blend "
                       "uses" % (MAX_FOLDER_VERSIONS, material.name, folder_name(material.name)))
 
 
 def release(absolute):
-    _reserved.discard(_key(absolute))
+    _reserved.discard(path_key(absolute))
 
 
 def filled(relative):
@@ -172,7 +130,7 @@ def created(folder):
     if bpy.app.background:
         if not handlers_installed():
             install_handlers()
-        _created[_key(folder)] = os.path.normpath(folder)
+        _created[path_key(folder)] = os.path.normpath(folder)
 
 
 def _referenced():
@@ -180,15 +138,15 @@ def _referenced():
     (whoever uses the image: a fake user or an asset keeps it in the saved file too)."""
     folders = set()
     for material in bpy.data.materials:
-        rec = material_scan.record(material)
+        rec = bake_record.record(material)
         if rec:
             try:
-                folders.add(_key(record_folder(rec)))
+                folders.add(path_key(record_folder(rec)))
             except (AttributeError, TypeError, ValueError):
                 pass  # a damaged record names no folder of ours
     for image in bpy.data.images:
         if image.source == "FILE" and image.filepath:
-            folders.add(_key(os.path.dirname(material_scan.image_file_path(image))))
+            folders.add(path_key(os.path.dirname(material_scan.image_file_path(image))))
     return folders
 
 
@@ -212,7 +170,7 @@ def delete_unused_folders():
     removed, left = delete_folders(doomed)
     for folder in doomed:
         if not os.path.isdir(folder):
-            del _created[_key(folder)]
+            del _created[path_key(folder)]
     return removed, left
 
 
@@ -241,7 +199,7 @@ def unused_folders():
     if not bpy.data.filepath:
         return []
     parent = os.path.dirname(os.path.abspath(bpy.data.filepath))
-    undoable = {_key(bpy.path.abspath(relative)) for relative in _filled}
+    undoable = {path_key(bpy.path.abspath(relative)) for relative in _filled}
     used = _referenced() | (_on_disk or set()) | undoable
     try:
         names = sorted(os.listdir(parent))
@@ -252,16 +210,17 @@ def unused_folders():
         path = os.path.join(parent, name)
         if not os.path.isdir(path):
             continue
-        if name.endswith(FOLDER_SUFFIX) and _key(path) not in used:
+        if name.endswith(FOLDER_SUFFIX) and path_key(path) not in used:
             folders.append(path)
-        elif name.endswith(FOLDER_SUFFIX + PENDING_SUFFIX) and _key(path[:-len(PENDING_SUFFIX)]) not in _reserved:
+        elif name.endswith(FOLDER_SUFFIX + PENDING_SUFFIX) and \
+                path_key(path[:-len(PENDING_SUFFIX)]) not in _reserved:
             folders.append(path)
     return folders
 
 
 def deleted_at_close(folder):
     """Whether closing the file will delete `folder` (this session wrote it, no save used it)."""
-    return _key(folder) in _created and _key(folder) not in _saved
+    return path_key(folder) in _created and path_key(folder) not in _saved
 
 
 def forget_session():
@@ -270,26 +229,29 @@ def forget_session():
     _saved.clear()
 
 
-def delete_bake_files(folder, names):
-    """Deletes the bake's own files (never anything else) and then the folder if it is empty."""
-    removed, left = 0, []
-    if folder and os.path.isdir(folder):
-        for name in names:
-            if not is_bake_file(name):
-                continue
-            path = os.path.join(folder, name)
-            try:
-                os.remove(path)
-                removed += 1
-            except FileNotFoundError:
-                pass
-            except OSError as e:
-                left.append("%s (%s)" % (path, e.strerror))
-        try:
-            os.rmdir(folder)
-        except OSError:
-            pass
-    return removed, left
+# ---- a bake's pending folder (main thread) ---------------------------------------------------------
+
+def commit_pending(job):
+    """Renames a pending job's folder into its lobe folder (new: new_folder)."""
+    if job.out_dir == job.final_dir:
+        return
+    try:
+        os.rename(job.out_dir, job.final_dir)
+    except OSError as e:
+        raise BakeError("OUTPUT_NOT_WRITABLE", "cannot move the lobe textures of '%s' into %s: %s"
+                        % (job.material_name, job.final_dir, e.strerror)) from None
+    job.out_dir = job.final_dir
+    created(job.final_dir)
+    filled(job.folder)
+    release(job.final_dir)
+
+
+def discard_pending(job):
+    """Deletes what a pending job wrote (nothing else: only its own files in its own folder) and
+    gives its folder name back."""
+    if job.out_dir != job.final_dir and os.path.isdir(job.out_dir):
+        delete_bake_files(job.out_dir, os.listdir(job.out_dir))
+    release(job.final_dir)
 
 
 def _close_session():

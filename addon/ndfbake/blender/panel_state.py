@@ -7,7 +7,7 @@ says why a handler left behind keeps the bpy module from exiting)."""
 import bpy
 from bpy.app.handlers import persistent
 
-from . import material_scan
+from ..shading import material_scan
 
 # material.as_pointer() -> (the material's name, its scan); the name guards against a new material
 # allocated where a deleted one was.

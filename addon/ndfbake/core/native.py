@@ -2,8 +2,8 @@
 
 The library is looked for, in order:
 1. the file named by the environment variable NDFBAKE_LIBRARY (tests, development);
-2. LIBRARY_NAME (ndfbake.dll, libndfbake.dylib or libndfbake.so) inside this add-on's folder
-   (what the platform's extension zip and the add-on zip carry);
+2. LIBRARY_NAME (ndfbake.dll, libndfbake.dylib or libndfbake.so) in this add-on's folder, beside
+   its __init__.py (what the platform's extension zip and the add-on zip carry);
 3. build/native/libndfbake.so of the source checkout this folder sits in (the full library, with
    image files; addon/ndfbake used straight from the repository after `bash scripts/build.sh`);
    only inside a checkout.
@@ -22,27 +22,9 @@ import os
 import sys
 import threading
 
-# The ABI this module's structures and signatures are written against (ndfb_abi_version()).
-ABI_VERSION = 1
-MAX_LOBES = 8  # NDFB_MAX_LOBES
-
-# ndfb_status
-OK = 0
-ERROR_INVALID_ARGUMENT = 1
-ERROR_FILE_NOT_FOUND = 2
-ERROR_UNSUPPORTED_FORMAT = 3
-ERROR_CORRUPT_FILE = 4
-ERROR_IO = 5
-ERROR_OUT_OF_MEMORY = 6
-ERROR_CANCELLED = 7
-ERROR_INTERNAL = 8
-
-# enums
-CONVENTION_OPENGL, CONVENTION_DIRECTX = 0, 1
-WRAP_REPEAT, WRAP_CLAMP = 0, 1
-BRDF_GGX, BRDF_BLINN_PHONG, BRDF_LAMBERT, BRDF_BECKMANN = 0, 1, 2, 3
-PRECISION_HALF, PRECISION_FLOAT = 0, 1
-FIT_PER_LEVEL, FIT_HIERARCHICAL = 0, 1
+from .native_abi import (ABI_VERSION, BRDF_GGX, CONVENTION_OPENGL, ERROR_INVALID_ARGUMENT, OK,
+                         PER_CORNER, PER_VERTEX, PROGRESS_FN, WRAP_REPEAT, DecodeOptions, FitOptions, Mesh,
+                         WriteOptions)
 
 # The library's file on each platform (each platform's extension zip carries its own).
 if sys.platform == "win32":
@@ -55,69 +37,6 @@ ENV_VARIABLE = "NDFBAKE_LIBRARY"
 
 # Room for any version of an option structure the library's *_init may write (see init_options).
 _SCRATCH_BYTES = 4096
-
-PROGRESS_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_float)
-
-
-class DecodeOptions(ctypes.Structure):
-    _fields_ = [
-        ("struct_size", ctypes.c_uint32),
-        ("convention", ctypes.c_int),
-        ("srgb", ctypes.c_int),
-        ("max_pixels", ctypes.c_uint64),
-    ]
-
-
-class FitOptions(ctypes.Structure):
-    _fields_ = [
-        ("struct_size", ctypes.c_uint32),
-        ("max_lobes", ctypes.c_uint32),
-        ("tolerance", ctypes.c_float),
-        ("brdf", ctypes.c_int),
-        ("brdf_parameter", ctypes.c_float),
-        ("wrap", ctypes.c_int),
-        ("align", ctypes.c_int32),
-        ("alignment_strength", ctypes.c_float),
-        ("max_iterations", ctypes.c_uint32),
-        ("method", ctypes.c_int),
-        ("threads", ctypes.c_uint32),
-        ("progress", PROGRESS_FN),
-        ("progress_user", ctypes.c_void_p),
-        ("max_memory_bytes", ctypes.c_uint64),
-        ("max_levels", ctypes.c_uint32),
-        ("starts", ctypes.c_uint32),
-        ("refine", ctypes.c_int32),
-    ]
-
-
-class WriteOptions(ctypes.Structure):
-    _fields_ = [
-        ("struct_size", ctypes.c_uint32),
-        ("precision", ctypes.c_int),
-        ("color_path", ctypes.c_char_p),
-        ("source_name", ctypes.c_char_p),
-        ("atlas", ctypes.c_int32),
-        ("mipmap", ctypes.c_int32),
-    ]
-
-
-class Mesh(ctypes.Structure):
-    _fields_ = [
-        ("struct_size", ctypes.c_uint32),
-        ("positions", ctypes.POINTER(ctypes.c_float)),
-        ("vertex_count", ctypes.c_size_t),
-        ("face_sizes", ctypes.POINTER(ctypes.c_uint32)),
-        ("face_count", ctypes.c_size_t),
-        ("corner_vertices", ctypes.POINTER(ctypes.c_uint32)),
-        ("corner_count", ctypes.c_size_t),
-        ("normals", ctypes.POINTER(ctypes.c_float)),
-        ("normal_domain", ctypes.c_int),
-        ("uvs", ctypes.POINTER(ctypes.c_float)),
-        ("uv_domain", ctypes.c_int),
-    ]
-
-
-PER_CORNER, PER_VERTEX = 0, 1
 
 
 class Error(Exception):
@@ -139,8 +58,9 @@ def _encode(path):
 
 
 def candidate_paths():
-    # realpath: an add-on folder linked into the user scripts path finds its checkout's build.
-    here = os.path.dirname(os.path.realpath(__file__))
+    # The add-on's folder (this file is in its core/); realpath: an add-on folder linked into the
+    # user scripts path finds its checkout's build.
+    here = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
     paths = []
     env = os.environ.get(ENV_VARIABLE)
     if env:

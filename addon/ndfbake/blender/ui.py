@@ -4,12 +4,14 @@ import textwrap
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
 
-from . import bake, blender_compat, lobe_folders, material_scan, native, nodes, operators, panel_state
+from ..core import native, native_abi
+from ..shading import bake_record, blender_compat, nodes, osl_group
+from . import bake, lobe_folders, operators, panel_state
 
 
 class NDFBakeSettings(bpy.types.PropertyGroup):
     max_lobes: IntProperty(name="Maximum Lobes", description="vMF lobes per texel at most (each costs a "
-                           "BSDF in the node group)", default=4, min=1, max=native.MAX_LOBES)
+                           "BSDF in the node group)", default=4, min=1, max=native_abi.MAX_LOBES)
     tolerance: FloatProperty(name="Tolerance", description="Relative effective-BRDF error a texel may keep: "
                              "fewer lobes where it suffices (0: the maximum everywhere)",
                              default=0.0, min=0.0, max=1.0, precision=3, step=1)
@@ -97,7 +99,7 @@ class NDFBAKE_PT_material(bpy.types.Panel):
         column.prop(settings, "refine")
         column.prop(settings, "level_of_detail")
         column.prop(settings, "cycles_lobes")
-        osl_available, osl_message = nodes.osl_status(context.scene)
+        osl_available, osl_message = osl_group.status(context.scene)
         if osl_available or settings.shader == "OSL":
             column.prop(settings, "shader")
         column.prop(settings, "pack")
@@ -115,7 +117,7 @@ class NDFBAKE_PT_material(bpy.types.Panel):
         layout.operator(operators.NDFBAKE_OT_delete_unused_folders.bl_idname, icon="TRASH")
 
         if baked:
-            rec = material_scan.record(material)
+            rec = bake_record.record(material)
             # Where the images are, as a path from the .blend: Save As and appending move them.
             folder = lobe_folders.record_folder(rec)
             _wrapped(layout.box(), "Baked into %s: %s" % (bpy.path.relpath(folder) if folder else "",

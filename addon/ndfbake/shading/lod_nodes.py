@@ -22,7 +22,8 @@ Two ways to get the texel a pixel needs:
 """
 from dataclasses import dataclass
 
-from . import id_names, scene_lod
+from ..core import id_names
+from . import scene_lod
 from .node_builders import COLOR, FLOAT, GROUP_VERSION, VECTOR, _find_group, _group_with_io, _link, _math, _mix, _vmath
 
 LOD_GROUP = "NDFB Level of Detail v%d" % GROUP_VERSION

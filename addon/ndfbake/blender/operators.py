@@ -14,7 +14,7 @@
   textures of the folders beside the .blend that the file does not use.
 Failures are reported as one ERROR line each; from Python, bpy.ops raises RuntimeError then.
 
-May call: bake, bake_job (a job's run/start/cancel/discard_pending), lobe_folders. Called by: ui,
+May call: bake (a job from bake.prepare: its run/start/cancel), lobe_folders (discard_pending). Called by: ui,
 __init__ (registration).
 """
 import os
@@ -23,7 +23,7 @@ import time
 import bpy
 from bpy.props import StringProperty
 
-from . import bake, bake_job, lobe_folders
+from . import bake, lobe_folders
 
 # The job the Bake button is running (one at a time), for the panel, and the modal operator
 # running it (stop_running_bakes).
@@ -152,7 +152,7 @@ class _ModalBakes:
         """Throws jobs away: what they wrote into their pending folders, and the folder names they
         reserved (prepared jobs not started too)."""
         for job in jobs:
-            bake_job.discard_pending(job)
+            lobe_folders.discard_pending(job)
 
     def modal(self, context, event):
         job = self._job
@@ -195,7 +195,7 @@ class _ModalBakes:
             try:
                 self._outcomes.append((done.material_name, bake.finish(done)))
             except bake.BakeError as e:
-                bake_job.discard_pending(done)
+                lobe_folders.discard_pending(done)
                 self._outcomes.append((done.material_name, e))
         self._done = []
         return _report_outcomes(self, self._outcomes)
