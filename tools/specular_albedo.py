@@ -1,7 +1,7 @@
 """Tabulates what a Principled BSDF v2 (Blender 4.0+) takes out of its diffuse for its dielectric
-specular layer, for the specular split's base (addon/ndfbake/specular_split.py):
+specular layer, for the specular split's base (addon/ndfbake/shading/specular_split.py):
 
-    python3 tools/specular_albedo.py           # writes addon/ndfbake/specular_albedo_table.py
+    python3 tools/specular_albedo.py           # writes addon/ndfbake/shading/specular_albedo_table.py
     python3 tools/specular_albedo.py --check   # exit status 1 where that file is not what this writes
 
 Cycles darkens a Principled's diffuse by the layer's directional albedo as it estimates it
@@ -28,7 +28,8 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+# grazing.ggx: the GGX model (visible normals, masking) the grazing study built and checked.
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "studies"))
 
 from grazing.ggx import lambda_local, reflect_kernel, strat2  # noqa: E402
 
@@ -38,7 +39,7 @@ MU_MIN = 1e-3         # the first column's view cosine: exactly grazing, a view 
 AVERAGE_NODES = 32    # Gauss-Legendre nodes in μ of the hemispherical averages
 AVERAGE_SAMPLES = 64 * 64
 Z_MAX = 0.98          # F0 = 0.92: at z = 1 (F0 = 1) s is 0/0, and mix(F0, 1, s) = 1 whatever s is
-OUTPUT = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "addon", "ndfbake",
+OUTPUT = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "addon", "ndfbake", "shading",
                       "specular_albedo_table.py")
 
 

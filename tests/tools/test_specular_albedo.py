@@ -1,4 +1,4 @@
-"""The specular layer's table (addon/ndfbake/specular_albedo_table.py: Cycles' s, E and F_ms and
+"""The specular layer's table (addon/ndfbake/shading/specular_albedo_table.py: Cycles' s, E and F_ms and
 EEVEE's split sum A and B) against its definition,
 integrated another way (tools/specular_albedo.py samples visible normals; this integrates the BRDF
 over the outgoing hemisphere on a Gauss-Legendre grid) and against its mirror limit (r = 0: the
@@ -12,10 +12,11 @@ import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "tools"))
-sys.path.insert(0, os.path.join(ROOT, "addon", "ndfbake"))
+sys.path.insert(0, os.path.join(ROOT, "studies"))  # the tool's grazing.ggx
+sys.path.insert(0, os.path.join(ROOT, "addon"))
 
 import specular_albedo as tool  # noqa: E402
-import specular_albedo_table as table  # noqa: E402
+from ndfbake.shading import specular_albedo_table as table  # noqa: E402
 
 SHAPE = np.array(table.FRESNEL_SHAPE).reshape(table.ROUGHNESS_SIZE, table.Z_SIZE, table.MU_SIZE)
 ALBEDO = np.array(table.GGX_ALBEDO).reshape(table.ROUGHNESS_SIZE, table.MU_SIZE)
