@@ -10,7 +10,7 @@ materials as the artist made them), then bakes it with 1, 4 and 8 lobes at most 
 again. Every variant is rendered once to warm up (EEVEE compiles its shaders, Cycles its kernels
 and the scene; that time is printed apart) and then timed over R renders, the fastest kept.
 --dielectric sets every material's Metallic to 0 first (plain and baked alike), where a bake
-draws the diffuse once beneath specular-only lobes (addon/ndfbake/specular_split.py). Prints
+draws the diffuse once beneath specular-only lobes (addon/ndfbake/shading/specular_split.py). Prints
 a table of seconds per frame and the ratio to plain, per engine, and writes DIR/frame_time.json.
 """
 import argparse

@@ -15,7 +15,7 @@ A diagnostic: only the times mean something. Variants (every material's group, s
   Map nodes and the closures);
 - four taps a level: Cycles' lobes read EEVEE's four Closest lookups a level, bilinear in nodes,
   instead of their one Linear lookup (what a group draws where EEVEE shares its BSDF output;
-  addon/ndfbake/lod_nodes.py): the same image;
+  addon/ndfbake/shading/lod_nodes.py): the same image;
 - done twice, the second result mixed in with weight 1e-6 and its inputs nudged by a relative
   1e-6 (Cycles merges nodes of equal inputs): the same image and light paths, so the added time
   is the part's cost. lookups twice (lookup addresses, lookups and blends of every lobe),

@@ -1,4 +1,4 @@
-"""Level of detail from the scene (addon/ndfbake/scene_lod.py and the node groups that use it).
+"""Level of detail from the scene (addon/ndfbake/shading/scene_lod.py and the node groups that use it).
 
 Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_lod.py -- LIB
 

@@ -1,4 +1,4 @@
-"""The OSL variant (BakeSettings.shader "OSL", addon/ndfbake/osl_group.py) in a Blender whose Cycles
+"""The OSL variant (BakeSettings.shader "OSL", addon/ndfbake/shading/osl_group.py) in a Blender whose Cycles
 has OSL (the bpy module from PyPI: bpy.app.build_options.cycles_osl). Skipped (exit 0, "skipped")
 where it has none.
 

@@ -1,4 +1,4 @@
-"""A bake's Transparent Shadows setting (addon/ndfbake/transparent_shadow.py), inside `blender -b`.
+"""A bake's Transparent Shadows setting (addon/ndfbake/shading/transparent_shadow.py), inside `blender -b`.
 
 Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_transparent_shadow.py -- LIB
 

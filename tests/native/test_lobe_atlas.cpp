@@ -49,7 +49,7 @@ float level_bilinear(const std::vector<float>& rgba, int w, int h, float u, floa
            fy * ((1 - fx) * texel(x0, y0 + 1) + fx * texel(x0 + 1, y0 + 1));
 }
 
-// The node group's addressing (addon/ndfbake/nodes.py, atlas_taps): wrap u, v into the level,
+// The node group's addressing (addon/ndfbake/shading/nodes.py, atlas_taps): wrap u, v into the level,
 // then four point lookups at atlas texel centres, rows counted up from the atlas bottom.
 float atlas_bilinear(const std::vector<float>& atlas, const AtlasLayout& layout, int level, float u, float v,
                      int channel, WrapMode wrap)

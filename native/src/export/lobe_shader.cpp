@@ -9,7 +9,7 @@ namespace ndfbake {
 namespace {
 
 // @SLOTS@: lobe slots, @WIDENING@: kGgxVmfWidening, @RESOLUTION@: kHalfInvKappaResolution or 0,
-// @NARROWING@: kGrazingNarrowing. The decoding is addon/ndfbake/lobe_nodes.py's lobe group; tests/blender/test_glsl_export.py runs this
+// @NARROWING@: kGrazingNarrowing. The decoding is addon/ndfbake/shading/lobe_nodes.py's lobe group; tests/blender/test_glsl_export.py runs this
 // file against the same rule with the add-on's constants.
 constexpr std::string_view kShader = R"glsl(// ndfbake.glsl: shading with the filtered normal distribution stored in this folder's lobe
 // textures (Han et al. 2007, "Frequency Domain Normal Map Filtering"), for real-time engines.
