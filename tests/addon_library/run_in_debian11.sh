@@ -15,7 +15,7 @@ cp -r "$folder" "$work/ndfbake"
 echo "ldd in Debian 11:"
 bash "$checkout/scripts/in-chroot.sh" "$root" "$work" -- ldd "$work/ndfbake/libndfbake.so"
 bash "$checkout/scripts/in-chroot.sh" "$root" "$work" "$checkout" -- env -i NDFBAKE_LIBRARY="$work/ndfbake/libndfbake.so" \
-    /usr/bin/python3 "$checkout/tests/addon_library/bake_with_native.py" "$checkout/addon" "$work/out"
+    /usr/bin/python3 -B "$checkout/tests/addon_library/bake_with_native.py" "$checkout/addon" "$work/out"
 
 info=$("$cli" info "$work/out/level00_lobe0.exr")
 echo "$info"

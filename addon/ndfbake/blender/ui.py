@@ -11,7 +11,8 @@ from . import bake, lobe_folders, operators, panel_state
 
 class NDFBakeSettings(bpy.types.PropertyGroup):
     max_lobes: IntProperty(name="Maximum Lobes", description="vMF lobes per texel at most (each costs a "
-                           "BSDF in the node group)", default=4, min=1, max=native_abi.MAX_LOBES)
+                           "BSDF in the node group)", default=bake.BakeSettings.max_lobes, min=1,
+                           max=native_abi.MAX_LOBES)
     tolerance: FloatProperty(name="Tolerance", description="Relative effective-BRDF error a texel may keep: "
                              "fewer lobes where it suffices (0: the maximum everywhere)",
                              default=0.0, min=0.0, max=1.0, precision=3, step=1)

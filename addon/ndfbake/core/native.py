@@ -241,17 +241,19 @@ class Context:
                                                    ctypes.byref(decode), ctypes.byref(handle)))
         return NormalMap(self, handle)
 
-    def bake(self, normal_map, out_dir, *, source_name=None, max_lobes=4, tolerance=0.0, roughness=0.5,
+    def bake(self, normal_map, out_dir, *, source_name=None, max_lobes=None, tolerance=0.0, roughness=0.5,
              wrap=WRAP_REPEAT, refine=False, threads=0, progress=None, max_levels=0, atlas=False,
              mipmap=False):
         """ndfb_bake_map with a GGX base BRDF of Blender roughness `roughness`; `source_name` is what
-        the files and report.json record as the map's origin (None: the library's "memory").
+        the files and report.json record as the map's origin (None: the library's "memory");
+        max_lobes None: the library's default (ndfb_fit_options_init).
 
         progress(stage, fraction) -> bool: return True to cancel. Exceptions inside it cancel too.
         Raises Error on failure (status ERROR_CANCELLED when progress asked to stop)."""
         lib = self.lib.lib
         fit = Library.init_options(FitOptions, lib.ndfb_fit_options_init)
-        fit.max_lobes = int(max_lobes)
+        if max_lobes is not None:
+            fit.max_lobes = int(max_lobes)
         fit.tolerance = float(tolerance)
         fit.brdf = BRDF_GGX
         fit.brdf_parameter = float(roughness)
