@@ -1,4 +1,4 @@
-"""examples/bake_blend.py: a scripted bake of a .blend from the command line.
+"""The scripted bake (addon/ndfbake/blender/command_line.py) through examples/bake_blend.py: a .blend baked from the command line.
 
 Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_addon_cli.py -- LIB
 

@@ -501,8 +501,8 @@ def run_bake_blend(blend, *args, timeout=120):
     env = dict(os.environ, NDFBAKE_LIBRARY=library, PYTHONDONTWRITEBYTECODE="1")  # keep addon/ clean
     proc = subprocess.run(blender_command(os.path.join(REPO, "examples", "bake_blend.py"), *args, blend=blend),
                           env=env, capture_output=True, text=True, timeout=timeout)
-    lines = [l for l in proc.stdout.splitlines() if l.startswith(("baked", "FAILED", "reverted", "bake_blend"))]
-    lines += [l for l in proc.stderr.splitlines() if l.startswith("bake_blend")]
+    lines = [l for l in proc.stdout.splitlines() if l.startswith(("baked", "FAILED", "reverted", "ndfbake:"))]
+    lines += [l for l in proc.stderr.splitlines() if l.startswith(("ndfbake:", "usage:", "blender"))]
     print("  bake_blend.py %s -> exit %d\n    %s" % (" ".join(args), proc.returncode, "\n    ".join(lines)),
           flush=True)
     return proc.returncode, proc.stdout + proc.stderr

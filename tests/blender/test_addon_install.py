@@ -20,6 +20,8 @@ ZIP is the extension of this platform (ndfbake-<version>-linux_x64.zip, -windows
   repository) looks for the checkout's build/native/libndfbake.so (where the system lets this
   process make a symbolic link: Windows without Developer Mode does not).
 """
+import contextlib
+import io
 import os
 import re
 import shutil
@@ -130,20 +132,81 @@ def test_installed_zip_loads_its_own_library_and_bakes():
         print("  installed %s as %s (library %s); %s" % (installed, module.__name__, lib.version, message))
 
         # A scene built with the installed module (its library makes the test normal map).
-        sys.modules.setdefault("ndfbake", module)
-        bpy.ops.wm.read_homefile(use_empty=True)  # keeps the enabled add-on (no factory reset)
-        png = os.path.join(directory, "normal.png")
-        with lib.context() as ctx, ctx.synthesize("bumps", 32, 32, 1) as normal_map:
-            h.save_normals_png(normal_map.read(), png)  # the add-on's library writes no image files
-        material = h.normal_mapped_material("Installed", png)
-        h.plane_with(material)
-        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(directory, "scene.blend"))
+        _scene_for(module, directory)
+        material = bpy.data.materials["Installed"]
         before = h.dump_material(material)
         h.expect(bpy.ops.ndfbake.bake(material="Installed") == {"FINISHED"}, "bake")
         h.expect(module.blender.bake.is_baked(material), "not baked")
         h.expect(bpy.ops.ndfbake.revert(material="Installed") == {"FINISHED"}, "revert")
         h.expect(h.dump_material(material) == before, "revert did not restore the material")
         _uninstall(module)
+
+
+def _scene_for(module, directory):
+    """A saved scene.blend in `directory` with one normal-mapped material, "Installed", its map
+    made by the installed module's library (which writes no image files); returns its path."""
+    if h.ADDON_PARENT not in sys.path:  # the helpers' `ndfbake` (enable_nodes): the source tree's, unregistered
+        sys.path.insert(0, h.ADDON_PARENT)
+    bpy.ops.wm.read_homefile(use_empty=True)  # keeps the enabled add-on (no factory reset)
+    png = os.path.join(directory, "normal.png")
+    with module.core.native.load().context() as ctx, ctx.synthesize("bumps", 32, 32, 1) as normal_map:
+        h.save_normals_png(normal_map.read(), png)
+    h.plane_with(h.normal_mapped_material("Installed", png))
+    blend = os.path.join(directory, "scene.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=blend)
+    return blend
+
+
+_ENABLE_AND_SAVE_PREFERENCES = """
+import bpy, sys
+repository = bpy.context.preferences.extensions.repos.new(name=%(repo)r, module=%(repo)r, custom_directory=%(dir)r)
+result = bpy.ops.extensions.package_install_files(filepath=%(zip)r, repo=repository.module, enable_on_install=True)
+assert result == {"FINISHED"}, result
+bpy.ops.wm.save_userpref()
+"""
+
+
+def test_blender_command_bakes_a_saved_file():
+    """`blender -c ndfbake FILE.blend --max-lobes 2` (Blender 4.2+, the extension enabled in the
+    user's preferences) bakes FILE and saves it, and `blender -c ndfbake` with no file exits 2.
+    Blender's binary runs the command in new processes whose preferences have the extension
+    installed; the bpy module, which has no binary, calls the function it registered."""
+    if not h.EXTENSIONS:
+        print("  Blender %d.%d has no command-line commands (4.2+): skipped" % bpy.app.version[:2])
+        return
+    os.environ.pop("NDFBAKE_LIBRARY", None)
+    with h.scratch_dir("ndfb-install-") as target, h.scratch_dir() as directory:
+        module, _ = _install(_zip(), target)
+        blend = _scene_for(module, directory)
+        if bpy.app.binary_path:
+            _uninstall(module)
+            user = os.path.join(directory, "user")
+            env = dict(os.environ, BLENDER_USER_RESOURCES=user)
+            setup = _ENABLE_AND_SAVE_PREFERENCES % {"repo": TEST_REPOSITORY, "dir": os.path.join(directory, "repo"),
+                                                    "zip": _zip()}
+            proc = subprocess.run([bpy.app.binary_path, "-b", "--python-exit-code", "1", "--python-expr", setup],
+                                  env=env, capture_output=True, text=True, timeout=120)
+            h.expect(proc.returncode == 0, "installing into the preferences: %s" % proc.stderr[-2000:])
+
+            def command(*args):
+                proc = subprocess.run([bpy.app.binary_path, "-c", "ndfbake", *args], env=env, capture_output=True,
+                                      text=True, timeout=300)
+                return proc.returncode, proc.stdout + proc.stderr
+        else:
+            def command(*args):
+                printed = io.StringIO()
+                with contextlib.redirect_stdout(printed), contextlib.redirect_stderr(printed):
+                    code = module.blender.command_line.command(list(args))
+                return code, printed.getvalue()
+        code, output = command(blend, "--max-lobes", "2")
+        h.expect(code == 0, "blender -c ndfbake %s: exit %s\n%s" % (blend, code, output[-3000:]))
+        bpy.ops.wm.open_mainfile(filepath=blend)
+        record = module.shading.bake_record.record(bpy.data.materials["Installed"])
+        h.expect(record is not None and record["settings"]["max_lobes"] == 2, "the saved file's record: %s" % record)
+        code, output = command()
+        h.expect(code == 2 and "name the .blend" in output, "with no file: exit %s\n%s" % (code, output[-2000:]))
+        if not bpy.app.binary_path:
+            _uninstall(module)
 
 
 # ---- an unusable library, each in its own Blender process ------------------------------------
@@ -243,4 +306,4 @@ if __name__ == "__main__":
         child_case(sys.argv[sys.argv.index("--child") + 1])
     else:
         h.run([test_zip_holds_the_addon_and_the_library, test_installed_zip_loads_its_own_library_and_bakes,
-               test_unusable_library_gives_one_message])
+               test_blender_command_bakes_a_saved_file, test_unusable_library_gives_one_message])

@@ -1,19 +1,24 @@
 """The add-on turned on and off (the package's register() and unregister() call these): the
 panel's and operators' classes, the per-material settings, the lobe folders' and panel's
-handlers."""
+handlers, and `blender -c ndfbake` (command_line.command) where Blender has commands (4.2+)."""
 import atexit
 
 import bpy
 
-from . import lobe_folders, operators, panel_state, ui
+from . import command_line, lobe_folders, operators, panel_state, ui
+
+_cli_command = None  # register_cli_command's handle (Blender 4.2+: `blender -c ndfbake`)
 
 
 def register():
+    global _cli_command
     lobe_folders.install_handlers()
     panel_state.install_handlers()
     for cls in ui.classes + operators.classes:
         bpy.utils.register_class(cls)
     bpy.types.Material.ndfbake_settings = bpy.props.PointerProperty(type=ui.NDFBakeSettings)
+    if hasattr(bpy.utils, "register_cli_command") and _cli_command is None:
+        _cli_command = bpy.utils.register_cli_command("ndfbake", command_line.command)
     if not bpy.app.binary_path:  # the bpy module: see _unregister_at_exit
         atexit.register(_unregister_at_exit)
 
@@ -29,9 +34,13 @@ def _unregister_at_exit():
 
 def unregister():
     """Also after _unregister_at_exit, when the bpy module's exit turns the add-on off again."""
+    global _cli_command
     atexit.unregister(_unregister_at_exit)
     if not hasattr(bpy.types.Material, "ndfbake_settings"):  # registered last by register()
         return
+    if _cli_command is not None:
+        bpy.utils.unregister_cli_command(_cli_command)
+        _cli_command = None
     operators.stop_running_bakes(bpy.context)
     lobe_folders.remove_handlers()  # and nothing of this session is deleted any more
     panel_state.remove_handlers()
