@@ -46,7 +46,7 @@ from grazing.correction import corrected_alpha2  # noqa: E402
 from grazing.ggx import WIDENING, basis, bend, ggx_eval, sample_vmf, strat2  # noqa: E402
 from grazing.texels import kappa_of  # noqa: E402
 
-MAX_LOBES = 8                 # NDFB_MAX_LOBES: what the demo bakes
+MAX_LOBES = 8                 # what the demo bakes (demo_scene.MAX_LOBES), the library's limit
 ARTIST_LOBES = 4              # the Bake panel's default Maximum Lobes
 WIDENINGS = (WIDENING, 1.0, 0.75)  # the add-on's, then narrower
 CYCLES_NARROWING = 4.0        # nodes.CYCLES_GRAZING_NARROWING: what Cycles draws by default
@@ -61,7 +61,8 @@ def fitted_levels(library, normals, roughness, max_lobes):
     4) of ndfb_pyramid_read_lobe's RGBA. Declares the pyramid calls, which the add-on does not make."""
     lib, vp, u32, floats = library.lib, ctypes.c_void_p, ctypes.c_uint32, ctypes.POINTER(ctypes.c_float)
     for name, restype, argtypes in (
-            ("ndfb_fit", ctypes.c_int, [vp, vp, ctypes.POINTER(native_abi.FitOptions), ctypes.POINTER(vp)]),
+            ("ndfb_fit", ctypes.c_int, [vp, vp, ctypes.POINTER(native_abi.FitOptions), native_abi.PROGRESS_FN, vp,
+                                        ctypes.POINTER(vp)]),
             ("ndfb_pyramid_destroy", None, [vp]),
             ("ndfb_pyramid_level_size", ctypes.c_int, [vp, u32, ctypes.POINTER(u32), ctypes.POINTER(u32)]),
             ("ndfb_pyramid_read_lobe", ctypes.c_int, [vp, u32, u32, floats, ctypes.c_size_t])):
@@ -71,7 +72,8 @@ def fitted_levels(library, normals, roughness, max_lobes):
     options.max_lobes, options.brdf_parameter = max_lobes, roughness
     pyramid, levels = vp(), []
     with library.context() as context, context.normal_map(normals, width, height, 3, True) as normal_map:
-        context.check(lib.ndfb_fit(context.handle, normal_map.handle, ctypes.byref(options), ctypes.byref(pyramid)))
+        context.check(lib.ndfb_fit(context.handle, normal_map.handle, ctypes.byref(options), native_abi.PROGRESS_FN(),
+                                   None, ctypes.byref(pyramid)))
         w, h = u32(), u32()
         while lib.ndfb_pyramid_level_size(pyramid, len(levels), ctypes.byref(w), ctypes.byref(h)) == native_abi.OK:
             slots = [np.zeros((h.value, w.value, 4), np.float32) for _ in range(max_lobes)]

@@ -13,6 +13,14 @@ set(NDFBAKE_IMAGE_FILE_SOURCES
   ${NDFBAKE_NATIVE_DIR}/src/io/normal_file_decode.cpp)
 set(NDFBAKE_NO_IMAGE_FILE_SOURCES ${NDFBAKE_NATIVE_DIR}/src/io/no_image_files.cpp)
 list(REMOVE_ITEM NDFBAKE_SOURCES ${NDFBAKE_IMAGE_FILE_SOURCES} ${NDFBAKE_NO_IMAGE_FILE_SOURCES})
+# Research code: the benchmark, the baseline representations it compares (baselines/: the bake's
+# report computes its single-vMF and Toksvig figures with ndf/moments) and the ground-truth entry
+# points of ndfbake_research.h. The full library carries it; the add-on's library is built from
+# NDFBAKE_SOURCES alone.
+file(GLOB NDFBAKE_RESEARCH_SOURCES CONFIGURE_DEPENDS ${NDFBAKE_NATIVE_DIR}/src/bench/*.cpp
+     ${NDFBAKE_NATIVE_DIR}/src/baselines/*.cpp)
+list(APPEND NDFBAKE_RESEARCH_SOURCES ${NDFBAKE_NATIVE_DIR}/src/capi/research_exports.cpp)
+list(REMOVE_ITEM NDFBAKE_SOURCES ${NDFBAKE_RESEARCH_SOURCES})
 
 # -fopenmp-simd honours `#pragma omp simd` (vectorized reductions in the EM E-step) without
 # OpenMP threads or -ffast-math. -fno-trapping-math lets GCC turn the float comparisons inside

@@ -1,5 +1,7 @@
 /*
- * ndfbake: normal-map NDF filtering (Han et al. 2007) behind a plain C interface.
+ * ndfbake: normal-map NDF filtering (Han et al. 2007) behind a plain C interface: decoding a
+ * normal map, fitting and writing its lobe files, reading them back, and tangent frames. The
+ * ground truth and the benchmark behind the project's figures are in ndfbake_research.h.
  *
  * Conventions
  * - Every call returns an ndfb_status; NDFB_OK is 0. On failure, ndfb_last_error() on the same
@@ -13,9 +15,12 @@
  * - Normals are unit float3 in tangent space, +Z out of the surface, OpenGL convention (+Y up V),
  *   rows top to bottom as stored in image files.
  * - Option structs start with struct_size, from which the library reads only the fields the caller
- *   has; fill them with the matching *_init function first (and see NDFB_ABI_VERSION). The fields
- *   a struct had when ABI 1 first shipped (all but those below an "added later" line) are always
- *   read: a struct_size that does not cover them is NDFB_ERROR_INVALID_ARGUMENT.
+ *   has; fill them with the matching *_init function first (and see NDFB_ABI_MAJOR). The fields
+ *   a struct had in minor version 0 of this ABI are always read: a struct_size that does not
+ *   cover them is NDFB_ERROR_INVALID_ARGUMENT. Fields a later minor version adds go at the end,
+ *   read only where struct_size covers them.
+ * - Limits and defaults are the library's: ndfb_max_lobes(), and the *_init functions' values.
+ * - Calls that run long take a progress callback of their own (NULL: none).
  * - A context may be used by one thread at a time; separate contexts are independent.
  * - Paths (files and folders) are UTF-8 strings on every platform, Windows included; messages name
  *   them in UTF-8.
@@ -49,8 +54,6 @@
 extern "C" {
 #endif
 
-#define NDFB_MAX_LOBES 8
-
 typedef enum ndfb_status {
     NDFB_OK = 0,
     NDFB_ERROR_INVALID_ARGUMENT = 1,  /* bad option, null pointer, size mismatch, bad handle */
@@ -82,12 +85,6 @@ typedef enum ndfb_fit_method {
     NDFB_FIT_HIERARCHICAL = 1  /* every level from the binned normals of the level below (default):
                                   as accurate, 4-5x faster (docs/speed.md, "Bake speed") */
 } ndfb_fit_method;
-typedef enum ndfb_representation {
-    NDFB_REPR_VMF_MIXTURE = 0, /* the budgeted vMF mixture (what bake writes) */
-    NDFB_REPR_SINGLE_VMF = 1,  /* one lobe from the mean resultant */
-    NDFB_REPR_TOKSVIG = 2      /* Toksvig's single lobe from the averaged normal's length */
-} ndfb_representation;
-
 /* Progress: fraction in [0, 1] and a stage name: "decode", "fit" (the lobe alignment included),
  * "measure" (the report's error statistics), "write". Every stage a call goes through is reported
  * at least once, however fast it runs (more often while it runs long). Called on the thread that
@@ -98,6 +95,7 @@ typedef int (*ndfb_progress_fn)(void* user, const char* stage, float fraction);
 typedef struct ndfb_context_s* ndfb_context;
 typedef struct ndfb_normal_map_s* ndfb_normal_map;
 typedef struct ndfb_pyramid_s* ndfb_pyramid;
+typedef struct ndfb_bake_result_s* ndfb_bake_result;
 
 typedef struct ndfb_decode_options {
     uint32_t struct_size;
@@ -108,7 +106,7 @@ typedef struct ndfb_decode_options {
 
 typedef struct ndfb_fit_options {
     uint32_t struct_size;
-    uint32_t max_lobes;           /* 1..NDFB_MAX_LOBES, default 4 */
+    uint32_t max_lobes;           /* 1..ndfb_max_lobes(), default 4 */
     float tolerance;              /* relative effective-BRDF error a texel may keep: fewer lobes where it
                                      suffices (costs fitting time); default 0: max_lobes everywhere */
     ndfb_brdf brdf;               /* the base BRDF the tolerance is measured with, default GGX */
@@ -121,9 +119,6 @@ typedef struct ndfb_fit_options {
                                      most 3 iterations up to 1024, 5 above) */
     ndfb_fit_method method;       /* default NDFB_FIT_HIERARCHICAL */
     uint32_t threads;             /* 0: all cores */
-    ndfb_progress_fn progress;
-    void* progress_user;
-    /* ---- added later: read only where struct_size covers them ---- */
     /* Memory a fit or bake may use (its estimated peak: the decoded map, the lobe pyramid, the
        largest working set of the fit, the texture being written). A larger job is refused up
        front with NDFB_ERROR_OUT_OF_MEMORY, before any pixel is read, with the estimate and the
@@ -152,7 +147,6 @@ typedef struct ndfb_write_options {
     ndfb_precision precision;     /* default half */
     const char* color_path;       /* optional base-colour image of the same size: per-lobe colour (eq. 22) */
     const char* source_name;      /* recorded in the files; default: the input path */
-    /* ---- added later: read only where struct_size covers it ---- */
     /* Non-zero: also write atlas_lobeJ.exr, every level of lobe slot J in one image, for renderers
        without MIP levels of their own: level 0 on the left, levels 1, 2, ... stacked top-down in a
        column to its right, each framed by a one-texel border of the texels the wrap mode puts
@@ -177,7 +171,6 @@ typedef struct ndfb_repairs {
 
 typedef struct ndfb_level_stats {
     uint32_t width, height;
-    uint64_t lobe_histogram[NDFB_MAX_LOBES + 1]; /* texels with k lobes */
     float mean_error;   /* relative effective-BRDF error, mean over the measured texels */
     float p95_error;
     uint32_t measured_texels;
@@ -185,11 +178,17 @@ typedef struct ndfb_level_stats {
 
 /* ---- library and context ------------------------------------------------------------------ */
 NDFB_API const char* ndfb_version(void);
-/* The library's NDFB_ABI_VERSION. A program compares it with the NDFB_ABI_VERSION it was compiled
- * with before anything else: the *_init functions write the option structs as this header lays
- * them out, so a program built against another layout must not call them. */
-#define NDFB_ABI_VERSION 1
-NDFB_API uint32_t ndfb_abi_version(void);
+/* The ABI: the major version changes where a layout or a signature does (a program built for
+ * another major must call nothing but ndfb_version, ndfb_abi_version and ndfb_abi_minor: the *_init
+ * functions write the option structs as this header lays them out); the minor grows where calls or trailing struct fields are
+ * added (a program built for minor m runs on any library of its major whose minor is >= m). A
+ * program compares ndfb_abi_version() with its NDFB_ABI_MAJOR before anything else. */
+#define NDFB_ABI_MAJOR 2
+#define NDFB_ABI_MINOR 0
+NDFB_API uint32_t ndfb_abi_version(void); /* the library's NDFB_ABI_MAJOR */
+NDFB_API uint32_t ndfb_abi_minor(void);
+/* The most lobes a texel may have (fit option max_lobes): 8. */
+NDFB_API uint32_t ndfb_max_lobes(void);
 NDFB_API ndfb_status ndfb_context_create(ndfb_context* out);
 NDFB_API void ndfb_context_destroy(ndfb_context ctx);
 /* The message of the last failed call on ctx ("" if none). Valid until the next call on ctx.
@@ -200,7 +199,7 @@ NDFB_API const char* ndfb_status_name(ndfb_status status);
  * which `ndfbake` and the tests use. The Blender add-on's library is built without image files, to
  * need nothing beyond the C runtime (docs/blender-versions.md); it writes the lobe
  * textures (OpenEXR) and report.json, but ndfb_normal_map_load, ndfb_bake, ndfb_describe_image,
- * ndfb_normal_map_save, ndfb_bench and a write_options color_path fail there with
+ * ndfb_normal_map_save and a write_options color_path fail there with
  * NDFB_ERROR_UNSUPPORTED_FORMAT and a message naming what to call instead: decode the image in
  * the host, then ndfb_normal_map_from_pixels and ndfb_bake_map. */
 NDFB_API int32_t ndfb_has_image_files(void);
@@ -208,6 +207,9 @@ NDFB_API int32_t ndfb_has_image_files(void);
 NDFB_API void ndfb_decode_options_init(ndfb_decode_options* options);
 NDFB_API void ndfb_fit_options_init(ndfb_fit_options* options);
 NDFB_API void ndfb_write_options_init(ndfb_write_options* options);
+/* Checks fit options as ndfb_fit and the bakes do, without fitting: NDFB_ERROR_INVALID_ARGUMENT
+ * naming the first bad field (a host checks its settings so before it starts a bake). */
+NDFB_API ndfb_status ndfb_fit_options_check(ndfb_context ctx, const ndfb_fit_options* options);
 
 /* ---- normal maps --------------------------------------------------------------------------- */
 /* Any format OpenImageIO reads; 8/16/32-bit; 2 channels (z reconstructed), 3 or 4 (alpha ignored). */
@@ -226,7 +228,7 @@ NDFB_API ndfb_status ndfb_normal_map_repairs(ndfb_normal_map map, ndfb_repairs* 
 
 /* ---- fitting ------------------------------------------------------------------------------- */
 NDFB_API ndfb_status ndfb_fit(ndfb_context ctx, ndfb_normal_map map, const ndfb_fit_options* options,
-                              ndfb_pyramid* out);
+                              ndfb_progress_fn progress, void* progress_user, ndfb_pyramid* out);
 NDFB_API void ndfb_pyramid_destroy(ndfb_pyramid pyramid);
 NDFB_API uint32_t ndfb_pyramid_level_count(ndfb_pyramid pyramid);
 NDFB_API uint32_t ndfb_pyramid_lobe_slots(ndfb_pyramid pyramid);
@@ -241,65 +243,74 @@ NDFB_API ndfb_status ndfb_pyramid_read_lobe(ndfb_pyramid pyramid, uint32_t level
 NDFB_API ndfb_status ndfb_pyramid_level_stats(ndfb_context ctx, ndfb_pyramid pyramid, uint32_t level,
                                               ndfb_brdf brdf, float brdf_parameter,
                                               uint32_t max_texels, ndfb_level_stats* out);
-
-/* ---- ground truth -------------------------------------------------------------------------- */
-/* Exact effective BRDF of texel (x, y) of `level` (mean of f(ω·n_q) over its fine normals, eq. 4)
- * at `direction_count` unit directions (xyz triples), into values[direction_count]. */
-NDFB_API ndfb_status ndfb_effective_brdf_reference(ndfb_context ctx, ndfb_normal_map map, ndfb_wrap wrap,
-                                                   uint32_t level, uint32_t x, uint32_t y, ndfb_brdf brdf,
-                                                   float brdf_parameter, const float* directions,
-                                                   size_t direction_count, float* values);
-/* The relative L2 error of a representation of texel (x, y) against the exact effective BRDF over
- * the library's fixed direction set for `brdf`. For NDFB_REPR_VMF_MIXTURE, pyramid supplies the lobes. */
-NDFB_API ndfb_status ndfb_texel_error(ndfb_context ctx, ndfb_normal_map map, ndfb_pyramid pyramid,
-                                      ndfb_representation representation, ndfb_wrap wrap, uint32_t level,
-                                      uint32_t x, uint32_t y, ndfb_brdf brdf, float brdf_parameter,
-                                      float* error);
+/* How many texels of `level` have k lobes, for k = 0..slots: count = ndfb_pyramid_lobe_slots + 1. */
+NDFB_API ndfb_status ndfb_pyramid_lobe_histogram(ndfb_pyramid pyramid, uint32_t level, uint64_t* counts,
+                                                 size_t count);
 
 /* ---- files --------------------------------------------------------------------------------- */
 /* Writes level{L}_lobe{j}.exr for every level and lobe slot, optional level{L}_color{j}.exr,
- * atlas_lobe{j}.exr and mip_lobe{j}.exr (write options atlas, mipmap), and report.json into
- * out_dir, each atomically (temp name, then rename). On failure or cancel, no file of this call
+ * atlas_lobe{j}.exr and mip_lobe{j}.exr (write options atlas, mipmap), ndfbake.glsl and report.json
+ * into out_dir, each atomically (temp name, then rename). On failure or cancel, no file of this call
  * remains, and an earlier bake's files in out_dir are all kept: they are replaced together or not
  * at all (on Windows a file open in another program cannot be replaced: the call then fails with
  * NDFB_ERROR_IO naming the file). The files and the report record the options the pyramid was
- * fitted with; of fit_options only the progress callback and threads are used. */
+ * fitted with, and it is written with the threads it was fitted with.
+ * out (may be NULL): what the call wrote, an ndfb_bake_result; NULL after a failure. */
 NDFB_API ndfb_status ndfb_pyramid_write(ndfb_context ctx, ndfb_pyramid pyramid, ndfb_normal_map map,
-                                        const char* out_dir, const ndfb_fit_options* fit_options,
-                                        const ndfb_write_options* options);
-/* Decode, fit and write in one call: what `ndfbake bake` runs. */
+                                        const char* out_dir, const ndfb_write_options* options,
+                                        ndfb_progress_fn progress, void* progress_user, ndfb_bake_result* out);
+/* Decode, fit and write in one call: what `ndfbake bake` runs. out as ndfb_pyramid_write. */
 NDFB_API ndfb_status ndfb_bake(ndfb_context ctx, const char* input_path, const char* out_dir,
                                const ndfb_decode_options* decode, const ndfb_fit_options* fit,
-                               const ndfb_write_options* write);
+                               const ndfb_write_options* write, ndfb_progress_fn progress, void* progress_user,
+                               ndfb_bake_result* out);
 /* ndfb_bake for a map already decoded (ndfb_normal_map_from_pixels, ndfb_synthesize): fit and write
  * in one call, with ndfb_bake's checks before the fit (out_dir writable, memory, colour image) and
  * its report (repairs, assumptions and source hash of the map's decode, timings). Progress stages
  * "fit", "measure", "write"; cancel as ndfb_bake. The files name write->source_name as their
  * source (default "memory"). What the Blender add-on runs, with pixels Blender decoded. */
 NDFB_API ndfb_status ndfb_bake_map(ndfb_context ctx, ndfb_normal_map map, const char* out_dir,
-                                   const ndfb_fit_options* fit, const ndfb_write_options* write);
+                                   const ndfb_fit_options* fit, const ndfb_write_options* write,
+                                   ndfb_progress_fn progress, void* progress_user, ndfb_bake_result* out);
 
-/* ---- benchmark ----------------------------------------------------------------------------- */
-typedef struct ndfb_bench_options {
-    uint32_t struct_size;
-    const char* const* map_paths;  /* normal maps to measure besides the synthetic patterns */
-    size_t map_count;
-    uint32_t synthetic_size;       /* side of the six synthetic patterns; 0 leaves them out */
-    const char* methods;           /* comma-separated (see `ndfbake bench --help`); NULL: all */
-    const char* brdfs;             /* comma-separated "ggx:R", "blinn-phong:S", …; NULL: ggx:0.3,ggx:0.6 */
-    const char* levels;            /* comma-separated MIP levels; NULL: 2,4,6 */
-    uint32_t texels_per_level;     /* measured texels per level; default 64 */
-    uint32_t threads;              /* 0: all cores */
-    ndfb_progress_fn progress;     /* stage: a line on the (map, method) just measured */
-    void* progress_user;
-} ndfb_bench_options;
+/* What a bake wrote, so that a host needs neither to list the folder nor to parse report.json:
+ * the levels and their sizes, the lobe slots and which of them any texel uses, the atlas layout
+ * and every file by kind, level and slot. Valid until ndfb_bake_result_destroy. */
+typedef enum ndfb_file_kind {
+    NDFB_FILE_LOBE = 0,    /* level{L}_lobe{j}.exr: slot j of level L */
+    NDFB_FILE_COLOR = 1,   /* level{L}_color{j}.exr */
+    NDFB_FILE_ATLAS = 2,   /* atlas_lobe{j}.exr: every level of slot j (level -1) */
+    NDFB_FILE_MIP = 3,     /* mip_lobe{j}.exr: slot j, MIP-mapped (level -1) */
+    NDFB_FILE_SHADER = 4,  /* ndfbake.glsl (level and slot -1) */
+    NDFB_FILE_REPORT = 5   /* report.json (level and slot -1) */
+} ndfb_file_kind;
+typedef struct ndfb_bake_file {
+    ndfb_file_kind kind;
+    int32_t level;         /* -1: not one level's */
+    int32_t slot;          /* -1: not one slot's */
+    const char* name;      /* the file's name in out_dir (ASCII) */
+} ndfb_bake_file;
+/* A level's frame in the atlas files: its texels start at (x + 1, y + 1), top row 0. */
+typedef struct ndfb_atlas_frame {
+    uint32_t x, y, width, height;
+} ndfb_atlas_frame;
 
-NDFB_API void ndfb_bench_options_init(ndfb_bench_options* options);
-/* Measures every representation (the default bake, 1..8 vMF lobes, the hierarchical fit, naive,
- * Toksvig, LEAN, single vMF, Xu's partitions, SH orders 2..8) on the same footprints: build time,
- * storage per texel, mean and 95th-percentile effective-BRDF error. Writes bench.csv, bench.md
- * and per-level error heat maps (PNG) into out_dir. */
-NDFB_API ndfb_status ndfb_bench(ndfb_context ctx, const ndfb_bench_options* options, const char* out_dir);
+NDFB_API void ndfb_bake_result_destroy(ndfb_bake_result result);
+NDFB_API uint32_t ndfb_bake_result_level_count(ndfb_bake_result result);
+NDFB_API ndfb_status ndfb_bake_result_level_size(ndfb_bake_result result, uint32_t level, uint32_t* width,
+                                                 uint32_t* height);
+NDFB_API uint32_t ndfb_bake_result_lobe_slots(ndfb_bake_result result);
+/* used[slot] = 1 where some texel of some level has a lobe in the slot (a tolerance can leave a
+ * slot empty everywhere: its textures are all zero); count = ndfb_bake_result_lobe_slots. */
+NDFB_API ndfb_status ndfb_bake_result_slots_used(ndfb_bake_result result, uint8_t* used, size_t count);
+/* The atlas files' size (0 x 0 where write option atlas was off) and each level's frame in them. */
+NDFB_API ndfb_status ndfb_bake_result_atlas_size(ndfb_bake_result result, uint32_t* width, uint32_t* height);
+NDFB_API ndfb_status ndfb_bake_result_atlas_frame(ndfb_bake_result result, uint32_t level, ndfb_atlas_frame* out);
+NDFB_API uint32_t ndfb_bake_result_file_count(ndfb_bake_result result);
+NDFB_API ndfb_status ndfb_bake_result_file(ndfb_bake_result result, uint32_t index, ndfb_bake_file* out);
+/* Non-zero where `name` (a file name, no folder) is one a bake writes: the files a host may
+ * remove with a bake, and no other. */
+NDFB_API int32_t ndfb_is_bake_file(const char* name);
 
 /* ---- tangent frames ------------------------------------------------------------------------ */
 /* MikkTSpace-compatible tangent frames (Mikkelsen 2008, §3), equal to what Blender's
@@ -409,7 +420,6 @@ typedef struct ndfb_space_options {
     uint32_t padding;   /* texels grown around islands (default 16); NDFB_PAD_ALL fills the image.
                            2^k texels keep k MIP levels free of bleeding across island borders */
     uint32_t threads;   /* 0: all cores */
-    /* ---- added later: read only where struct_size covers it ---- */
     uint32_t frame_normal;  /* an ndfb_frame_normal (default NDFB_FRAME_NORMAL_INTERPOLATED) */
 } ndfb_space_options;
 #define NDFB_PAD_ALL 0xffffffffu

@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "ndfbake.h"
+#include "ndfbake_research.h"  // ndfbake.h and the ground truth, the benchmark
 
 namespace {
 
@@ -289,19 +289,22 @@ int run_bake(ndfb_context ctx, const Args& args)
     if (out_dir.empty()) return fail(1, "bake needs --out DIR");
     if (!color.empty()) write.color_path = color.c_str();
     progress.terminal = stderr_is_terminal();
-    fit.progress = print_progress;
-    fit.progress_user = &progress;
 
     std::signal(SIGINT, on_interrupt);
     std::signal(SIGTERM, on_interrupt);
-    const ndfb_status status = ndfb_bake(ctx, args.positional[0].c_str(), out_dir.c_str(), &decode, &fit, &write);
+    ndfb_bake_result result = nullptr;
+    const ndfb_status status = ndfb_bake(ctx, args.positional[0].c_str(), out_dir.c_str(), &decode, &fit, &write,
+                                         print_progress, &progress, &result);
     if (status != NDFB_OK) {
         // Wipe an unfinished progress line so the reason stands on a line of its own.
         if (!progress.quiet && progress.terminal && progress.last_percent >= 0 && progress.last_percent < 100)
             std::fputs("\r              \r", stderr);
         return fail_status(ctx, status);
     }
-    std::printf("wrote %s/report.json, the lobe textures and ndfbake.glsl\n", out_dir.c_str());
+    std::printf("wrote %u files into %s: %u levels of %u lobe slots, ndfbake.glsl and report.json\n",
+                ndfb_bake_result_file_count(result), out_dir.c_str(), ndfb_bake_result_level_count(result),
+                ndfb_bake_result_lobe_slots(result));
+    ndfb_bake_result_destroy(result);
     return 0;
 }
 
@@ -396,9 +399,8 @@ int run_bench(ndfb_context ctx, const Args& args)
     if (!methods.empty()) bench.methods = methods.c_str();
     if (!brdfs.empty()) bench.brdfs = brdfs.c_str();
     if (!levels.empty()) bench.levels = levels.c_str();
-    bench.progress = print_bench_line;
     std::signal(SIGINT, on_interrupt);
-    const ndfb_status status = ndfb_bench(ctx, &bench, out_dir.c_str());
+    const ndfb_status status = ndfb_bench(ctx, &bench, out_dir.c_str(), print_bench_line, nullptr);
     if (status != NDFB_OK) return fail_status(ctx, status);
     std::printf("wrote %s/bench.csv, bench.md and heat maps\n", out_dir.c_str());
     return 0;

@@ -1,7 +1,8 @@
 // The add-on's library as Blender loads it: loaded from its own folder by a process with an
 // empty environment (no LD_LIBRARY_PATH), it must find what it needs there, bake pixels from
 // memory through ndfb_bake_map, and refuse every call that needs image files with
-// NDFB_ERROR_UNSUPPORTED_FORMAT and a message saying what to call instead. Built for every
+// NDFB_ERROR_UNSUPPORTED_FORMAT and a message saying what to call instead; it carries none of
+// ndfbake_research.h. Built for every
 // platform that runs here (Linux natively and under qemu-user, Windows under wine).
 // Usage: addon_library_bake_from_pixels <folder>/<library file> <out_dir>
 // Prints one line per check; exit status 0 when all pass.
@@ -99,7 +100,8 @@ int main(int argc, char** argv)
     dl_iterate_phdr(&check_loaded_object, &folder);
 #endif
 
-    check(NDFB(api, ndfb_abi_version)() == NDFB_ABI_VERSION, "ABI version");
+    check(NDFB(api, ndfb_abi_version)() == NDFB_ABI_MAJOR && NDFB(api, ndfb_abi_minor)() >= NDFB_ABI_MINOR, "ABI version");
+    check(NDFB(api, ndfb_max_lobes)() == 8, "ndfb_max_lobes() is 8");
     check(NDFB(api, ndfb_has_image_files)() == 0, "ndfb_has_image_files() is 0");
     ndfb_context ctx = nullptr;
     check(NDFB(api, ndfb_context_create)(&ctx) == NDFB_OK, "context");
@@ -126,21 +128,39 @@ int main(int argc, char** argv)
     NDFB(api, ndfb_fit_options_init)(&fit);
     fit.max_lobes = 2;
     std::set<std::string> stages;
-    fit.progress = [](void* user, const char* stage, float) {
+    const ndfb_progress_fn note_stage = [](void* user, const char* stage, float) {
         static_cast<std::set<std::string>*>(user)->insert(stage);
         return 0;
     };
-    fit.progress_user = &stages;
     ndfb_write_options write;
     NDFB(api, ndfb_write_options_init)(&write);
     write.source_name = "bumps (Blender image)";
     write.atlas = 1;
-    const ndfb_status baked = NDFB(api, ndfb_bake_map)(ctx, map, out_dir.c_str(), &fit, &write);
+    ndfb_bake_result result = nullptr;
+    const ndfb_status baked = NDFB(api, ndfb_bake_map)(ctx, map, out_dir.c_str(), &fit, &write, note_stage, &stages,
+                                                       &result);
     check(baked == NDFB_OK, std::string("ndfb_bake_map: ") + last_error(ctx));
     check(stages == std::set<std::string>{"fit", "measure", "write"}, "progress stages fit, measure, write");
     for (const char* file : {"level00_lobe0.exr", "level00_lobe1.exr", "level06_lobe1.exr", "atlas_lobe0.exr",
                              "report.json", "ndfbake.glsl"})
         check(std::filesystem::exists(std::filesystem::path(out_dir) / file), std::string("wrote ") + file);
+    // The result names what is in the folder: 7 levels x 2 slots, 2 atlases, the shader, the report.
+    check(NDFB(api, ndfb_bake_result_level_count)(result) == 7 && NDFB(api, ndfb_bake_result_lobe_slots)(result) == 2,
+          "the result's 7 levels of 2 slots");
+    const uint32_t file_count = NDFB(api, ndfb_bake_result_file_count)(result);
+    check(file_count == 7 * 2 + 2 + 2, "the result's 18 files");
+    for (uint32_t i = 0; i < file_count; ++i) {
+        ndfb_bake_file file{};
+        check(NDFB(api, ndfb_bake_result_file)(result, i, &file) == NDFB_OK &&
+                  std::filesystem::exists(std::filesystem::path(out_dir) / file.name) &&
+                  NDFB(api, ndfb_is_bake_file)(file.name) == 1,
+              std::string("the result's file ") + (file.name ? file.name : "?") + " is there");
+    }
+    uint32_t atlas_width = 0, atlas_height = 0;
+    check(NDFB(api, ndfb_bake_result_atlas_size)(result, &atlas_width, &atlas_height) == NDFB_OK &&
+              atlas_width == (64 + 2) + (32 + 2) && atlas_height == (32 + 2) + (16 + 2) + (8 + 2) + (4 + 2) + (2 + 2) + (1 + 2),
+          "the atlas is 100 x 75 (level 0 framed, levels 1.. framed in a column beside it)");
+    NDFB(api, ndfb_bake_result_destroy)(result);
 
     // What needs image files: refused with the documented status and a message naming the way out.
     const auto refused = [&](ndfb_status status, const std::string& call) {
@@ -155,17 +175,19 @@ int main(int argc, char** argv)
     ndfb_normal_map loaded = nullptr;
     refused(NDFB(api, ndfb_normal_map_load)(ctx, "normal.png", &decode, &loaded), "ndfb_normal_map_load");
     check(loaded == nullptr, "ndfb_normal_map_load leaves its output NULL");
-    refused(NDFB(api, ndfb_bake)(ctx, "normal.png", refused_dir.c_str(), &decode, &fit, &write), "ndfb_bake");
+    refused(NDFB(api, ndfb_bake)(ctx, "normal.png", refused_dir.c_str(), &decode, &fit, &write, nullptr, nullptr, nullptr),
+            "ndfb_bake");
     char text[64];
     refused(NDFB(api, ndfb_describe_image)(ctx, "level00_lobe0.exr", text, sizeof text, nullptr),
             "ndfb_describe_image");
     refused(NDFB(api, ndfb_normal_map_save)(ctx, map, (refused_dir + "/map.png").c_str()), "ndfb_normal_map_save");
-    ndfb_bench_options bench;
-    NDFB(api, ndfb_bench_options_init)(&bench);
-    bench.synthetic_size = 8;
-    refused(NDFB(api, ndfb_bench)(ctx, &bench, refused_dir.c_str()), "ndfb_bench");
+    // ndfbake_research.h's code is not in the add-on's library at all.
+    for (const char* name : {"ndfb_bench", "ndfb_bench_options_init", "ndfb_texel_error",
+                             "ndfb_effective_brdf_reference"})
+        check(api.symbol(name) == nullptr, std::string("the research entry point ") + name + " is not exported");
     write.color_path = "color.png";
-    refused(NDFB(api, ndfb_bake_map)(ctx, map, refused_dir.c_str(), &fit, &write), "ndfb_bake_map with color_path");
+    refused(NDFB(api, ndfb_bake_map)(ctx, map, refused_dir.c_str(), &fit, &write, nullptr, nullptr, nullptr),
+            "ndfb_bake_map with color_path");
     check(!std::filesystem::exists(refused_dir), "refused calls leave no folder behind");
 
     NDFB(api, ndfb_normal_map_destroy)(map);

@@ -45,21 +45,40 @@ def main(addon_folder, out):
         check(float(np.abs(read - normals).max()) < 1e-5, "pixels in, the same unit normals out (%.1e)"
               % float(np.abs(read - normals).max()))
         stages = set()
-        ctx.bake(normal_map, out, source_name="facets", max_lobes=2, atlas=True,
-                 progress=lambda stage, fraction: stages.add(stage) and False)
+        output = ctx.bake(normal_map, out, ctx.fit_options(max_lobes=2), source_name="facets", atlas=True,
+                          progress=lambda stage, fraction: stages.add(stage) and False)
         check(stages == {"fit", "measure", "write"}, "progress stages %s" % sorted(stages))
         with open(os.path.join(out, "report.json")) as f:
             report = json.load(f)
         files = sorted(os.listdir(out))
         check({"level00_lobe0.exr", "level00_lobe1.exr", "atlas_lobe0.exr", "atlas_lobe1.exr"} <= set(files),
               "files %s" % " ".join(files))
+        # What the library says it wrote is what is there, and what the report says.
+        check(sorted(f.name for f in output.files) == files and output.files[-1].name == "report.json",
+              "the bake's output names the folder's files: %s" % [f.name for f in output.files])
+        check(output.lobe_textures(atlas=True) == {0: "atlas_lobe0.exr", 1: "atlas_lobe1.exr"}
+              and output.lobe_textures(atlas=False) == {0: "level00_lobe0.exr", 1: "level00_lobe1.exr"},
+              "lobe textures %s" % output.lobe_textures(atlas=True))
+        check(output.levels == [(level["width"], level["height"]) for level in report["levels"]]
+              and output.slots == 2 and output.slots_used == report["slots_used"],
+              "levels %s, slots %d %s" % (output.levels, output.slots, output.slots_used))
+        check([output.atlas_size[0], output.atlas_size[1]] == [report["atlas"]["width"], report["atlas"]["height"]]
+              and output.atlas_frames == report["atlas"]["levels"],
+              "atlas %s %s against the report's %s" % (output.atlas_size, output.atlas_frames, report["atlas"]))
+        check(library.max_lobes == 8 and library.default_max_lobes == 4,
+              "limits %d, default %d" % (library.max_lobes, library.default_max_lobes))
+        try:
+            ctx.fit_options(max_lobes=library.max_lobes + 1)
+            check(False, "max_lobes past the library's limit is accepted")
+        except native.Error as e:
+            check("max_lobes must be in 1..8, got 9" in e.message, "the library's check: %s" % e.message)
         levels = len(report.get("atlas", {}).get("levels", []))
         check(report["input"]["source"] == "facets" and report["input"]["format"] == "memory"
               and levels == len(report["levels"]) == 6, "report.json: input %s (%s), %d levels in the atlas"
               % (report["input"]["source"], report["input"]["format"], levels))
         cancelled = out + "-cancelled"
         try:
-            ctx.bake(normal_map, cancelled, max_lobes=2, progress=lambda stage, fraction: True)
+            ctx.bake(normal_map, cancelled, ctx.fit_options(max_lobes=2), progress=lambda stage, fraction: True)
             check(False, "a cancelled bake returned")
         except native.Error as e:
             check(e.status == native_abi.ERROR_CANCELLED, "a cancelled bake raises %s" % e.status_name)

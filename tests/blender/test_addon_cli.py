@@ -80,7 +80,7 @@ def test_command_line_bake_and_revert():
         code, out = h.run_bake_blend(blend, "--material", "Nope")
         h.expect(code == 2 and "no material named 'Nope'" in out, "unknown material: exit %d\n%s" % (code, out))
         code, out = h.run_bake_blend(blend, "--max-lobes", "0")
-        h.expect(code == 2 and "0 is not in 1..8" in out, "--max-lobes 0: exit %d\n%s" % (code, out))
+        h.expect(code == 2 and "max_lobes must be in 1..8, got 0" in out, "--max-lobes 0: exit %d\n%s" % (code, out))
         code, out = h.run_bake_blend(blend, "--cycles-lobes", "sharp")
         h.expect(code == 2 and "invalid choice: 'sharp'" in out, "--cycles-lobes sharp: exit %d\n%s" % (code, out))
         h.expect(os.path.getmtime(blend) == mtime, "the .blend was saved after a usage error")

@@ -139,16 +139,16 @@ write_normal_map = demo_build.write_normal_map
 save_normals_png = demo_build.save_normals_png
 
 
-def bake_image_file(path, out_dir, **settings):
+def bake_image_file(path, out_dir, atlas=False, **settings):
     """Bakes the normal map in the image file `path` into `out_dir` as the add-on does: Blender
-    decodes it (image_pixels), the library bakes the pixels (native.Context.bake's settings)."""
+    decodes it (image_pixels), the library bakes the pixels (`settings`: native.Context.fit_options')."""
     from ndfbake.core import native
     from ndfbake.blender import image_pixels
     image = bpy.data.images.load(path, check_existing=True)
     image.colorspace_settings.name = "Non-Color"
     p = image_pixels.read(image)
     with native.load().context() as ctx, ctx.normal_map(p.data, p.width, p.height, p.channels, p.signed) as m:
-        ctx.bake(m, out_dir, source_name=path, **settings)
+        return ctx.bake(m, out_dir, ctx.fit_options(**settings), source_name=path, atlas=atlas)
 
 
 def reset_scene():

@@ -238,7 +238,7 @@ def child_case(case):
     lib, message = module.core.native.status()
     assert lib is None and message, (lib, message)
     expected = {"missing": "native library not found", "broken": "could not be loaded",
-                "abi": "has ABI version 99, this add-on needs %d" % module.core.native_abi.ABI_VERSION,
+                "abi": "has ABI version 99, this add-on needs %d" % module.core.native_abi.ABI_MAJOR,
                 "numpy": "NumPy is missing from Blender's Python"}[case]
     assert expected in message, message
     assert "\n" not in message

@@ -52,7 +52,7 @@ def straight_down_view(world_name, world_color, size, cycles_samples, eevee_samp
 
 
 def test_eevee_and_cycles_render_the_baked_material():
-    from ndfbake.core import native_abi
+    from ndfbake.core import native
     from ndfbake.shading import blender_compat
     from ndfbake.blender import bake
     with h.scratch_dir() as directory:
@@ -65,7 +65,7 @@ def test_eevee_and_cycles_render_the_baked_material():
         scene = setup_scene()
         plain = {engine: render(scene, engine, os.path.join(directory, "plain-%s.exr" % engine))
                  for engine in (blender_compat.eevee_engine(), "CYCLES")}
-        for lobes in (4, native_abi.MAX_LOBES):
+        for lobes in (4, native.load().max_lobes):
             result = bake.bake_material(material, bake.BakeSettings(max_lobes=lobes))
             h.expect(result.lobes == lobes, "%d lobes asked, %d baked" % (lobes, result.lobes))
             for engine in (blender_compat.eevee_engine(), "CYCLES"):
@@ -87,7 +87,7 @@ def test_emission_is_drawn_once_as_the_principled_draws_it():
     0.5: nearly all it renders is its emission, which the group draws once, beside the lobes,
     weighted by Alpha as the Principled weights it. Baked with 8 lobes, each engine's mean
     within 2% of the unbaked material's (EEVEE 4 TAA samples, Cycles 4 samples, 64²)."""
-    from ndfbake.core import native_abi
+    from ndfbake.core import native
     from ndfbake.shading import blender_compat
     from ndfbake.blender import bake
     with h.scratch_dir() as directory:
@@ -103,7 +103,7 @@ def test_emission_is_drawn_once_as_the_principled_draws_it():
         scene = setup_scene()
         engines = (blender_compat.eevee_engine(), "CYCLES")
         plain = {e: float(render(scene, e, os.path.join(directory, "plain-%s.exr" % e)).mean()) for e in engines}
-        bake.bake_material(material, bake.BakeSettings(max_lobes=native_abi.MAX_LOBES))
+        bake.bake_material(material, bake.BakeSettings(max_lobes=native.load().max_lobes))
         group = material.node_tree.nodes["ndfbake"].node_tree
         emitters = [n.name for n in group.nodes if n.bl_idname == "ShaderNodeEmission"]
         h.expect(emitters == ["Emission"], "the group's emission nodes: %s" % emitters)

@@ -59,7 +59,7 @@ void check_lobes(ndfb_pyramid pyramid)
 {
     using ndfbake_fuzz::require;
     const uint32_t levels = ndfb_pyramid_level_count(pyramid), slots = ndfb_pyramid_lobe_slots(pyramid);
-    require(levels >= 1 && slots >= 1 && slots <= NDFB_MAX_LOBES, "pyramid shape");
+    require(levels >= 1 && slots >= 1 && slots <= ndfb_max_lobes(), "pyramid shape");
     for (uint32_t level = 0; level < levels; ++level) {
         uint32_t w = 0, h = 0;
         require(ndfb_pyramid_level_size(pyramid, level, &w, &h) == NDFB_OK, "level size");
@@ -96,7 +96,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     Cancel cancel;
     ndfb_fit_options fit;
     ndfb_fit_options_init(&fit);
-    fit.max_lobes = pick<uint32_t>(in, 1, NDFB_MAX_LOBES);
+    fit.max_lobes = pick<uint32_t>(in, 1, ndfb_max_lobes());
     fit.tolerance = in.ConsumeBool() ? 0.0f : pick_float(in, 0.0f, 1.0f);
     const uint32_t brdf = pick<uint32_t>(in, 0, 3);
     set_raw(fit.brdf, brdf);
@@ -111,10 +111,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     set_raw(fit.method, pick<uint32_t>(in, 0, 1));
     fit.threads = pick<uint32_t>(in, 0, 3);
     fit.max_memory_bytes = in.ConsumeBool() ? 0 : in.ConsumeIntegral<uint64_t>();
+    ndfb_progress_fn progress_fn = nullptr;
     if (in.ConsumeBool()) {
         cancel.after = in.ConsumeIntegralInRange<int>(0, 64);
-        fit.progress = progress;
-        fit.progress_user = &cancel;
+        progress_fn = progress;
     }
     fit.refine = in.ConsumeIntegralInRange<uint8_t>(0, 7) == 0;  // slow: one input in eight
     if (in.ConsumeIntegralInRange<uint8_t>(0, 31) == 0) fit.struct_size = in.ConsumeIntegral<uint32_t>();
@@ -159,12 +159,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     }
 
     if (through_bake) {
-        status = ndfb_bake(ctx, color.c_str(), out.c_str(), &decode, &fit, &write);
+        status = ndfb_bake(ctx, color.c_str(), out.c_str(), &decode, &fit, &write, progress_fn, &cancel, nullptr);
         check(status, "ndfb_bake");
         if (status != NDFB_OK) require(empty_or_missing(out), "a failed bake leaves no file");
     } else {
         ndfb_pyramid pyramid = nullptr;
-        status = ndfb_fit(ctx, map, &fit, &pyramid);
+        status = ndfb_fit(ctx, map, &fit, progress_fn, &cancel, &pyramid);
         check(status, "ndfb_fit");
         require((status == NDFB_OK) == (pyramid != nullptr), "a pyramid exactly when the fit succeeds");
         if (pyramid) {
@@ -187,7 +187,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
                 require(false, "texel error finite");
             }
             if (write_files) {
-                status = ndfb_pyramid_write(ctx, pyramid, map, out.c_str(), &fit, &write);
+                status = ndfb_pyramid_write(ctx, pyramid, map, out.c_str(), &write, progress_fn, &cancel, nullptr);
                 check(status, "ndfb_pyramid_write");
                 if (status != NDFB_OK) require(empty_or_missing(out), "a failed write leaves no file");
             }

@@ -13,7 +13,7 @@
 
 #include <unistd.h>
 
-#include "ndfbake.h"
+#include "ndfbake_research.h"  // ndfbake.h and the ground truth, the benchmark
 
 namespace ndfbake_fuzz {
 

@@ -72,7 +72,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
         fit.threads = 1;
         fit.max_iterations = 5;
         ndfb_pyramid pyramid = nullptr;
-        check(ndfb_fit(ctx, map, &fit, &pyramid), "ndfb_fit");
+        check(ndfb_fit(ctx, map, &fit, nullptr, nullptr, &pyramid), "ndfb_fit");
         ndfb_pyramid_destroy(pyramid);
     }
     ndfb_normal_map_destroy(map);

@@ -31,7 +31,7 @@
 #include <vector>
 #include <OpenImageIO/imageio.h>
 #include "io/normal_encode.h"
-#include "ndfbake.h"
+#include "ndfbake_research.h"  // ndfbake.h and the ground truth, the benchmark
 #include "synth/patterns.h"
 #include "test_support.h"
 
@@ -160,7 +160,7 @@ protected:
                            const std::string& what)
     {
         const std::string out = path("out-" + std::to_string(bakes_++));
-        expect_error(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_), expected, parts,
+        expect_error(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), expected, parts,
                      what + " (bake)");
         EXPECT_TRUE(listing(out).empty()) << what << ": the bake left files in " << out;
     }

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <cstdio>
 #include <fstream>
+#include <set>
 #include <thread>
 
 #include <OpenImageIO/imageio.h>
@@ -32,7 +33,7 @@ TEST_F(BakeApi, WritesSelfDescribingLobeTexturesAndAReport)
 {
     const std::string input = synth_file(Pattern::bumps, 32, 16, "bumps.png");
     const std::string out = path("out");
-    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK) << ndfb_last_error(ctx_);
     for (int level = 0; level < 6; ++level)
         for (int lobe = 0; lobe < 4; ++lobe) {
             char file[32];
@@ -59,6 +60,131 @@ TEST_F(BakeApi, WritesSelfDescribingLobeTexturesAndAReport)
     for (const std::string& entry : listing(out)) EXPECT_EQ(entry.find(".ndfbake"), std::string::npos) << entry;
 }
 
+TEST_F(BakeApi, TheResultNamesEveryFileTheBakeWroteAndNothingElse)
+{
+    // What ndfb_bake hands back against the folder itself and the files' own headers: the same
+    // files, each of the kind, level and slot its name and ndfbake:* attributes say; the levels'
+    // sizes as the lobe files have them; the atlas frames inside the atlas image.
+    const std::string input = synth_file(Pattern::bumps, 24, 16, "bumps.png");
+    const std::string color = synth_file(Pattern::fbm, 24, 16, "color.png");
+    const std::string out = path("out");
+    write_.atlas = 1;
+    write_.mipmap = 1;
+    write_.color_path = color.c_str();
+    fit_.max_lobes = 3;
+    ndfb_bake_result result = nullptr;
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, &result), NDFB_OK)
+        << ndfb_last_error(ctx_);
+    ASSERT_NE(result, nullptr);
+    const uint32_t levels = ndfb_bake_result_level_count(result), slots = ndfb_bake_result_lobe_slots(result);
+    EXPECT_EQ(levels, 6u);  // 24x16, 12x8, 6x4, 3x2, 2x1, 1x1
+    EXPECT_EQ(slots, 3u);
+    std::vector<std::string> named;
+    int lobes = 0, colors = 0, atlases = 0, mips = 0, shaders = 0, reports = 0;
+    for (uint32_t i = 0; i < ndfb_bake_result_file_count(result); ++i) {
+        ndfb_bake_file file{};
+        ASSERT_EQ(ndfb_bake_result_file(result, i, &file), NDFB_OK);
+        named.push_back(file.name);
+        EXPECT_EQ(ndfb_is_bake_file(file.name), 1) << file.name;
+        char expected[32] = "";
+        switch (file.kind) {
+        case NDFB_FILE_LOBE: ++lobes; std::snprintf(expected, sizeof expected, "level%02d_lobe%d.exr", file.level, file.slot); break;
+        case NDFB_FILE_COLOR: ++colors; std::snprintf(expected, sizeof expected, "level%02d_color%d.exr", file.level, file.slot); break;
+        case NDFB_FILE_ATLAS: ++atlases; std::snprintf(expected, sizeof expected, "atlas_lobe%d.exr", file.slot); break;
+        case NDFB_FILE_MIP: ++mips; std::snprintf(expected, sizeof expected, "mip_lobe%d.exr", file.slot); break;
+        case NDFB_FILE_SHADER: ++shaders; std::snprintf(expected, sizeof expected, "ndfbake.glsl"); break;
+        case NDFB_FILE_REPORT: ++reports; std::snprintf(expected, sizeof expected, "report.json"); break;
+        }
+        EXPECT_EQ(std::string(file.name), expected);
+        if (file.kind == NDFB_FILE_LOBE) {
+            uint32_t w = 0, h = 0;
+            ASSERT_EQ(ndfb_bake_result_level_size(result, uint32_t(file.level), &w, &h), NDFB_OK);
+            const ImageInfo info = read_image_info(out + "/" + file.name);
+            EXPECT_EQ(uint32_t(info.width), w) << file.name;
+            EXPECT_EQ(uint32_t(info.height), h) << file.name;
+            for (const auto& [key, value] : info.attributes) {
+                if (key == "ndfbake:level") EXPECT_EQ(value, std::to_string(file.level)) << file.name;
+                if (key == "ndfbake:lobe") EXPECT_EQ(value, std::to_string(file.slot)) << file.name;
+            }
+        }
+    }
+    EXPECT_EQ(lobes, int(levels * slots));
+    EXPECT_EQ(colors, int(levels * slots));
+    EXPECT_EQ(atlases, int(slots));
+    EXPECT_EQ(mips, int(slots));
+    EXPECT_EQ(shaders, 1);
+    EXPECT_EQ(reports, 1);
+    EXPECT_EQ(named.back(), "report.json");
+    std::set<std::string> paths;
+    for (const std::string& name : named) paths.insert(out + "/" + name);
+    EXPECT_EQ(paths.size(), named.size());
+    EXPECT_EQ(paths, listing(out));
+
+    std::vector<uint8_t> used(slots);
+    ASSERT_EQ(ndfb_bake_result_slots_used(result, used.data(), used.size()), NDFB_OK);
+    EXPECT_EQ(used, (std::vector<uint8_t>{1, 1, 1}));  // no tolerance: every slot holds lobes
+    uint32_t atlas_width = 0, atlas_height = 0;
+    ASSERT_EQ(ndfb_bake_result_atlas_size(result, &atlas_width, &atlas_height), NDFB_OK);
+    const ImageInfo atlas = read_image_info(out + "/atlas_lobe0.exr");
+    EXPECT_EQ(uint32_t(atlas.width), atlas_width);
+    EXPECT_EQ(uint32_t(atlas.height), atlas_height);
+    for (uint32_t level = 0; level < levels; ++level) {
+        ndfb_atlas_frame frame{};
+        uint32_t w = 0, h = 0;
+        ASSERT_EQ(ndfb_bake_result_atlas_frame(result, level, &frame), NDFB_OK);
+        ASSERT_EQ(ndfb_bake_result_level_size(result, level, &w, &h), NDFB_OK);
+        EXPECT_EQ(frame.width, w);
+        EXPECT_EQ(frame.height, h);
+        EXPECT_LE(frame.x + frame.width + 2, atlas_width) << level;
+        EXPECT_LE(frame.y + frame.height + 2, atlas_height) << level;
+    }
+    ndfb_atlas_frame frame{};
+    EXPECT_EQ(ndfb_bake_result_atlas_frame(result, levels, &frame), NDFB_ERROR_INVALID_ARGUMENT);
+    ndfb_bake_file file{};
+    EXPECT_EQ(ndfb_bake_result_file(result, ndfb_bake_result_file_count(result), &file), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(ndfb_bake_result_slots_used(result, used.data(), used.size() + 1), NDFB_ERROR_INVALID_ARGUMENT);
+    ndfb_bake_result_destroy(result);
+
+    for (const char* other : {"notes.txt", "level00_lobe0.exr.tmp", "Level00_lobe0.exr", "report.json.bak", ""})
+        EXPECT_EQ(ndfb_is_bake_file(other), 0) << other;
+    EXPECT_EQ(ndfb_is_bake_file(nullptr), 0);
+    EXPECT_EQ(ndfb_bake_result_file_count(nullptr), 0u);
+}
+
+TEST_F(BakeApi, AFailedBakeHandsBackNoResult)
+{
+    const std::string input = synth_file(Pattern::bumps, 16, 16, "bumps.png");
+    fit_.max_lobes = ndfb_max_lobes() + 1;
+    ndfb_bake_result result = reinterpret_cast<ndfb_bake_result>(&fit_);  // garbage the call must clear
+    EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("out").c_str(), &decode_, &fit_, &write_, nullptr, nullptr, &result),
+              NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(result, nullptr);
+    EXPECT_NE(std::string(ndfb_last_error(ctx_)).find("1.." + std::to_string(ndfb_max_lobes())), std::string::npos)
+        << ndfb_last_error(ctx_);
+}
+
+TEST_F(BakeApi, FitOptionsAreCheckedAsTheBakeChecksThem)
+{
+    // ndfb_fit_options_check says what ndfb_bake would say about the same options, before any work.
+    const std::string input = synth_file(Pattern::bumps, 8, 8, "bumps.png");
+    EXPECT_EQ(ndfb_fit_options_check(ctx_, &fit_), NDFB_OK) << ndfb_last_error(ctx_);
+    for (const uint32_t lobes : {0u, ndfb_max_lobes() + 1}) {
+        fit_.max_lobes = lobes;
+        EXPECT_EQ(ndfb_fit_options_check(ctx_, &fit_), NDFB_ERROR_INVALID_ARGUMENT) << lobes;
+        const std::string checked = ndfb_last_error(ctx_);
+        EXPECT_NE(checked.find("max_lobes must be in 1.." + std::to_string(ndfb_max_lobes())), std::string::npos) << checked;
+        EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("out").c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr),
+                  NDFB_ERROR_INVALID_ARGUMENT);
+        EXPECT_EQ(checked, ndfb_last_error(ctx_));
+    }
+    fit_.max_lobes = ndfb_max_lobes();
+    fit_.tolerance = 2.0f;
+    EXPECT_EQ(ndfb_fit_options_check(ctx_, &fit_), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(ndfb_last_error(ctx_)).find("tolerance"), std::string::npos) << ndfb_last_error(ctx_);
+    EXPECT_EQ(ndfb_fit_options_check(ctx_, nullptr), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_FALSE(std::filesystem::exists(path("out")));
+}
+
 TEST_F(BakeApi, BakeMapWritesWhatBakeWritesForTheSamePixels)
 {
     // The same normals as a float EXR file and as pixels in memory (0.5 n + 0.5, as the file
@@ -75,16 +201,15 @@ TEST_F(BakeApi, BakeMapWritesWhatBakeWritesForTheSamePixels)
     ASSERT_EQ(ndfb_normal_map_from_pixels(ctx_, pixels.data(), pixels.size(), 16, 8, 3, 0, &decode_, &map), NDFB_OK);
 
     std::vector<std::string> stages;
-    ndfb_fit_options fit = fit_;
-    fit.progress = [](void* user, const char* stage, float) {
+    const ndfb_progress_fn note_stage = [](void* user, const char* stage, float) {
         auto& seen = *static_cast<std::vector<std::string>*>(user);
         if (seen.empty() || seen.back() != stage) seen.push_back(stage);
         return 0;
     };
-    fit.progress_user = &stages;
-    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), path("from_file").c_str(), &decode_, &fit_, &write_), NDFB_OK)
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), path("from_file").c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK)
         << ndfb_last_error(ctx_);
-    ASSERT_EQ(ndfb_bake_map(ctx_, map, path("from_pixels").c_str(), &fit, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+    ASSERT_EQ(ndfb_bake_map(ctx_, map, path("from_pixels").c_str(), &fit_, &write_, note_stage, &stages, nullptr), NDFB_OK)
+        << ndfb_last_error(ctx_);
     ndfb_normal_map_destroy(map);
     EXPECT_EQ(stages, (std::vector<std::string>{"fit", "measure", "write"}));
     for (const char* file : {"/level00_lobe0.exr", "/level02_lobe3.exr", "/level04_lobe1.exr"}) {
@@ -109,8 +234,8 @@ TEST_F(BakeApi, WrittenFilesRecordTheFitThePyramidHad)
     fitted.wrap = NDFB_WRAP_CLAMP;
     fitted.max_lobes = 2;
     ndfb_pyramid pyramid = nullptr;
-    ASSERT_EQ(ndfb_fit(ctx_, map, &fitted, &pyramid), NDFB_OK) << ndfb_last_error(ctx_);
-    ASSERT_EQ(ndfb_pyramid_write(ctx_, pyramid, map, path("out").c_str(), &fit_, &write_), NDFB_OK)
+    ASSERT_EQ(ndfb_fit(ctx_, map, &fitted, nullptr, nullptr, &pyramid), NDFB_OK) << ndfb_last_error(ctx_);
+    ASSERT_EQ(ndfb_pyramid_write(ctx_, pyramid, map, path("out").c_str(), &write_, nullptr, nullptr, nullptr), NDFB_OK)
         << ndfb_last_error(ctx_);
     std::ifstream report(path("out") + "/report.json");
     const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
@@ -130,9 +255,9 @@ TEST_F(BakeApi, ReadLobeReturnsWhatTheLobeFilesHold)
     ndfb_normal_map map = nullptr;
     ASSERT_EQ(ndfb_synthesize(ctx_, "weave", 8, 8, 1, &map), NDFB_OK);
     ndfb_pyramid pyramid = nullptr;
-    ASSERT_EQ(ndfb_fit(ctx_, map, &fit_, &pyramid), NDFB_OK) << ndfb_last_error(ctx_);
+    ASSERT_EQ(ndfb_fit(ctx_, map, &fit_, nullptr, nullptr, &pyramid), NDFB_OK) << ndfb_last_error(ctx_);
     write_.precision = NDFB_PRECISION_FLOAT;
-    ASSERT_EQ(ndfb_pyramid_write(ctx_, pyramid, map, path("out").c_str(), &fit_, &write_), NDFB_OK)
+    ASSERT_EQ(ndfb_pyramid_write(ctx_, pyramid, map, path("out").c_str(), &write_, nullptr, nullptr, nullptr), NDFB_OK)
         << ndfb_last_error(ctx_);
     for (uint32_t level = 0; level < ndfb_pyramid_level_count(pyramid); ++level)
         for (uint32_t lobe = 0; lobe < ndfb_pyramid_lobe_slots(pyramid); ++lobe) {
@@ -152,9 +277,9 @@ TEST_F(BakeApi, MaxLevelsFitsAndWritesOnlyTheLevelsAsked)
 {
     const std::string input = synth_file(Pattern::fbm, 32, 32, "fbm.png");
     const std::string all = path("all"), three = path("three");
-    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), all.c_str(), &decode_, &fit_, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), all.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK) << ndfb_last_error(ctx_);
     fit_.max_levels = 3;
-    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), three.c_str(), &decode_, &fit_, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), three.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK) << ndfb_last_error(ctx_);
     // report.json, ndfbake.glsl and 3 levels × 4 lobes; the full bake has 6 levels (32² → 1²).
     EXPECT_EQ(listing(three).size(), 2u + 3u * 4u);
     EXPECT_EQ(listing(all).size(), 2u + 6u * 4u);
@@ -177,7 +302,7 @@ TEST_F(BakeApi, MaxLevelsFitsAndWritesOnlyTheLevelsAsked)
     std::snprintf(file, sizeof file, "/level%02d_lobe0.exr", 3);
     EXPECT_FALSE(std::filesystem::exists(three + file));
     fit_.max_levels = 65;
-    EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("bad").c_str(), &decode_, &fit_, &write_), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("bad").c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_ERROR_INVALID_ARGUMENT);
     EXPECT_NE(std::string(ndfb_last_error(ctx_)).find("max_levels"), std::string::npos);
 }
 
@@ -187,12 +312,12 @@ TEST_F(BakeApi, StartsAreOneOrTwoAndTheDefaultIsTheHierarchicalFitWithTwo)
     EXPECT_EQ(fit_.starts, 2u);
     const std::string input = synth_file(Pattern::fbm, 16, 16, "fbm.png");
     fit_.starts = 3;
-    EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("bad").c_str(), &decode_, &fit_, &write_), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("bad").c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_ERROR_INVALID_ARGUMENT);
     EXPECT_NE(std::string(ndfb_last_error(ctx_)).find("starts"), std::string::npos);
     EXPECT_FALSE(std::filesystem::exists(path("bad")));
     fit_.starts = 1;
     fit_.method = NDFB_FIT_PER_LEVEL;
-    EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("reference").c_str(), &decode_, &fit_, &write_), NDFB_OK)
+    EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("reference").c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK)
         << ndfb_last_error(ctx_);
 }
 
@@ -213,9 +338,9 @@ TEST_F(BakeApi, RefiningForTheBrdfLowersEveryLevelsErrorAndSaysSo)
     fit_.brdf = NDFB_BRDF_BLINN_PHONG;
     fit_.brdf_parameter = 128.0f;
     const std::string em = path("em"), refined = path("refined");
-    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), em.c_str(), &decode_, &fit_, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), em.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK) << ndfb_last_error(ctx_);
     fit_.refine = 1;
-    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), refined.c_str(), &decode_, &fit_, &write_), NDFB_OK)
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), refined.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK)
         << ndfb_last_error(ctx_);
     // Level 1 holds each texel's four normals exactly (nothing to refine); above, every level is
     // lower and their mean by at least a fifth. (Not a tenth at every level: at the 1×1 top, where
@@ -253,7 +378,7 @@ TEST_F(BakeApi, TheReportGivesNoErrorWithoutAlignmentItDidNotMeasure)
 {
     const std::string input = synth_file(Pattern::fbm, 32, 32, "fbm.png");
     const auto report_of = [&](const std::string& out) {
-        EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+        EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK) << ndfb_last_error(ctx_);
         std::ifstream file(out + "/report.json");
         std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
         std::erase_if(text, [](char c) { return std::isspace(static_cast<unsigned char>(c)); });
@@ -280,7 +405,7 @@ TEST_F(BakeApi, TheReportNamesTheSlotsNoTexelUsesAndTheirTexturesAreZero)
     const std::string input = synth_file(Pattern::bumps, 32, 32, "bumps.png");
     const std::string out = path("out");
     fit_.tolerance = 1.0f;  // any error is tolerated: one lobe per texel
-    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK) << ndfb_last_error(ctx_);
     std::ifstream report(out + "/report.json");
     std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
     std::erase_if(text, [](char c) { return std::isspace(static_cast<unsigned char>(c)); });
@@ -325,7 +450,7 @@ TEST_F(BakeApi, NanAndZeroPixelsAreRepairedCountedAndFitFinite)
     EXPECT_EQ(repairs.below_horizon, 1u);
     EXPECT_EQ(repairs.zero_length, 14u);
     ndfb_pyramid pyramid = nullptr;
-    ASSERT_EQ(ndfb_fit(ctx_, map, &fit_, &pyramid), NDFB_OK);
+    ASSERT_EQ(ndfb_fit(ctx_, map, &fit_, nullptr, nullptr, &pyramid), NDFB_OK);
     for (uint32_t level = 0; level < ndfb_pyramid_level_count(pyramid); ++level) {
         uint32_t w = 0, h = 0;
         ndfb_pyramid_level_size(pyramid, level, &w, &h);
@@ -356,7 +481,7 @@ TEST_F(BakeApi, PerLobeColourFollowsTheNormalsItBelongsTo)
     const std::string color = path("color.exr");
     write_.color_path = color.c_str();
     write_.precision = NDFB_PRECISION_FLOAT;
-    ASSERT_EQ(ndfb_bake(ctx_, path("groove.png").c_str(), path("out").c_str(), &decode_, &fit_, &write_), NDFB_OK)
+    ASSERT_EQ(ndfb_bake(ctx_, path("groove.png").c_str(), path("out").c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK)
         << ndfb_last_error(ctx_);
     int checked = 0;
     for (int level = 1; level <= 3; ++level)
@@ -398,7 +523,7 @@ TEST_F(BakeApi, GreyAndAlphaColourImageGivesGreyLobes)
     const std::string color = path("grey.tif");
     write_.color_path = color.c_str();
     write_.precision = NDFB_PRECISION_FLOAT;
-    ASSERT_EQ(ndfb_bake(ctx_, path("bumps.png").c_str(), path("out").c_str(), &decode_, &fit_, &write_), NDFB_OK)
+    ASSERT_EQ(ndfb_bake(ctx_, path("bumps.png").c_str(), path("out").c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK)
         << ndfb_last_error(ctx_);
     int w = 0, h = 0;
     const auto colors = read_rgba_exr(path("out") + "/level02_color0.exr", w, h);
@@ -414,16 +539,16 @@ TEST_F(BakeApi, ABadColourImageFailsBeforeTheFit)
 {
     const std::string input = synth_file(Pattern::bumps, 16, 16, "bumps.png");
     const std::string small = synth_file(Pattern::bumps, 8, 8, "small.png"), missing = path("missing.png");
-    fit_.progress = +[](void* stages, const char* stage, float) -> int {
+    const ndfb_progress_fn note_stage = +[](void* stages, const char* stage, float) -> int {
         static_cast<std::vector<std::string>*>(stages)->push_back(stage);
         return 0;
     };
     for (const auto& [color, expected] : {std::pair{small, NDFB_ERROR_INVALID_ARGUMENT},
                                           std::pair{missing, NDFB_ERROR_FILE_NOT_FOUND}}) {
         std::vector<std::string> stages;
-        fit_.progress_user = &stages;
         write_.color_path = color.c_str();
-        EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("out").c_str(), &decode_, &fit_, &write_), expected) << color;
+        EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("out").c_str(), &decode_, &fit_, &write_, note_stage, &stages, nullptr),
+                  expected) << color;
         EXPECT_NE(std::string(ndfb_last_error(ctx_)).find(color), std::string::npos) << ndfb_last_error(ctx_);
         EXPECT_TRUE(stages.empty()) << color << ": reached stage " << stages.front();
         EXPECT_FALSE(std::filesystem::exists(path("out")));
@@ -452,19 +577,19 @@ TEST_F(BakeApi, BadInputsGetSpecificErrorsAndLeaveNoOutput)
     for (const BadInput& c : cases) {
         const std::string input = path(c.name), out = path(std::string("out-") + c.name);
         if (!c.missing) std::ofstream(input, std::ios::binary) << c.contents;
-        const ndfb_status status = ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_);
+        const ndfb_status status = ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr);
         EXPECT_EQ(status, c.expected) << c.name << ": " << ndfb_last_error(ctx_);
         EXPECT_NE(std::string(ndfb_last_error(ctx_)).find(c.name), std::string::npos) << ndfb_last_error(ctx_);
         EXPECT_FALSE(std::filesystem::exists(out)) << c.name << ": a failed bake left its output folder";
     }
     // Nor the parents a nested output folder needed.
     const std::string nested = path("a") + "/b/c/";
-    EXPECT_EQ(ndfb_bake(ctx_, path("missing.png").c_str(), nested.c_str(), &decode_, &fit_, &write_),
+    EXPECT_EQ(ndfb_bake(ctx_, path("missing.png").c_str(), nested.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr),
               NDFB_ERROR_FILE_NOT_FOUND);
     EXPECT_FALSE(std::filesystem::exists(path("a"))) << "a failed bake left the parents of its output folder";
     // An output folder that cannot exist (under a regular file): an i/o error, before any work.
     const std::string out = good_png + "/out";
-    EXPECT_EQ(ndfb_bake(ctx_, good_png.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_ERROR_IO);
+    EXPECT_EQ(ndfb_bake(ctx_, good_png.c_str(), out.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_ERROR_IO);
     EXPECT_NE(std::string(ndfb_last_error(ctx_)).find("not writable"), std::string::npos) << ndfb_last_error(ctx_);
 }
 
@@ -475,7 +600,7 @@ TEST_F(BakeApi, OptionsOutOfRangeAreRejected)
         ndfb_fit_options fit;
         ndfb_fit_options_init(&fit);
         change(fit);
-        return ndfb_bake(ctx_, input.c_str(), path("out").c_str(), &decode_, &fit, &write_);
+        return ndfb_bake(ctx_, input.c_str(), path("out").c_str(), &decode_, &fit, &write_, nullptr, nullptr, nullptr);
     };
     EXPECT_EQ(bake_with([](ndfb_fit_options& f) { f.max_lobes = 0; }), NDFB_ERROR_INVALID_ARGUMENT);
     EXPECT_EQ(bake_with([](ndfb_fit_options& f) { f.max_lobes = 1000; }), NDFB_ERROR_INVALID_ARGUMENT);
@@ -489,16 +614,21 @@ TEST_F(BakeApi, CancelLeavesAnEarlierBakeUntouched)
 {
     const std::string input = synth_file(Pattern::weave, 64, 64, "weave.png");
     const std::string out = path("out");
-    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_OK);
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK);
     const auto before = listing(out);
     std::ifstream report_before(out + "/report.json");
     const std::string text_before((std::istreambuf_iterator<char>(report_before)), std::istreambuf_iterator<char>());
 
     for (const char* cancel_at : {"fit", "measure", "write"}) {
-        fit_.progress = +[](void* user, const char* stage, float) -> int { return std::strcmp(stage, static_cast<const char*>(user)) == 0 ? 1 : 0; };
-        fit_.progress_user = const_cast<char*>(cancel_at);
+        const ndfb_progress_fn cancel = +[](void* user, const char* stage, float) -> int {
+            return std::strcmp(stage, static_cast<const char*>(user)) == 0 ? 1 : 0;
+        };
         fit_.max_lobes = 3;  // a different bake, so a partial commit would show
-        EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_ERROR_CANCELLED) << cancel_at;
+        ndfb_bake_result result = nullptr;
+        EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_, cancel, const_cast<char*>(cancel_at),
+                            &result),
+                  NDFB_ERROR_CANCELLED) << cancel_at;
+        EXPECT_EQ(result, nullptr);
         EXPECT_EQ(listing(out), before) << cancel_at;
         std::ifstream report_after(out + "/report.json");
         EXPECT_EQ(std::string((std::istreambuf_iterator<char>(report_after)), std::istreambuf_iterator<char>()), text_before);
@@ -512,9 +642,9 @@ TEST_F(BakeApi, CancelReachesTheFitOfAOneTexelMap)
     ndfb_normal_map map = nullptr;
     ASSERT_EQ(ndfb_normal_map_from_pixels(ctx_, pixel, 3, 1, 1, 3, 0, &decode_, &map), NDFB_OK)
         << ndfb_last_error(ctx_);
-    fit_.progress = +[](void*, const char*, float) -> int { return 1; };
+    const ndfb_progress_fn cancel = +[](void*, const char*, float) -> int { return 1; };
     ndfb_pyramid pyramid = nullptr;
-    EXPECT_EQ(ndfb_fit(ctx_, map, &fit_, &pyramid), NDFB_ERROR_CANCELLED);
+    EXPECT_EQ(ndfb_fit(ctx_, map, &fit_, cancel, nullptr, &pyramid), NDFB_ERROR_CANCELLED);
     EXPECT_EQ(pyramid, nullptr);
     ndfb_normal_map_destroy(map);
 }
@@ -527,7 +657,7 @@ TEST_F(BakeApi, NullHandlesAndMismatchedSizesAreErrorsNotCrashes)
     EXPECT_EQ(ndfb_normal_map_load(ctx_, nullptr, &decode_, &map), NDFB_ERROR_INVALID_ARGUMENT);
     float pixels[12] = {};
     EXPECT_EQ(ndfb_normal_map_from_pixels(ctx_, pixels, 12, 3, 3, 3, 0, &decode_, &map), NDFB_ERROR_INVALID_ARGUMENT);
-    EXPECT_EQ(ndfb_fit(ctx_, nullptr, &fit_, nullptr), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(ndfb_fit(ctx_, nullptr, &fit_, nullptr, nullptr, nullptr), NDFB_ERROR_INVALID_ARGUMENT);
     EXPECT_EQ(ndfb_pyramid_read_lobe(nullptr, 0, 0, pixels, 4), NDFB_ERROR_INVALID_ARGUMENT);
     EXPECT_EQ(ndfb_pyramid_level_count(nullptr), 0u);
 }

@@ -61,11 +61,8 @@ protected:
         ndfb_fit_options_init(&fit);
         fit.max_lobes = max_lobes;
         fit.threads = 2;
-        if (watch) {
-            fit.progress = watch_progress;
-            fit.progress_user = watch;
-        }
-        const ndfb_status status = ndfb_bake(ctx, input.c_str(), out.c_str(), nullptr, &fit, nullptr);
+        const ndfb_status status = ndfb_bake(ctx, input.c_str(), out.c_str(), nullptr, &fit, nullptr,
+                                             watch ? watch_progress : nullptr, watch, nullptr);
         if (error) *error = ndfb_last_error(ctx);
         ndfb_context_destroy(ctx);
         return status;

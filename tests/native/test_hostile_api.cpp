@@ -52,7 +52,7 @@ TEST_F(HostileInputs, OptionsOutOfRangeAreInvalidArgumentsAndWriteNothing)
         ndfb_fit_options_init(&fit);
         c.change(fit);
         const std::string out = path(std::string("out ") + c.name);
-        expect_error(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit, &write_),
+        expect_error(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit, &write_, nullptr, nullptr, nullptr),
                      NDFB_ERROR_INVALID_ARGUMENT, {c.says}, c.name);
         EXPECT_FALSE(fs::exists(out)) << c.name;
     }
@@ -73,7 +73,7 @@ TEST_F(HostileInputs, OptionsOutOfRangeAreInvalidArgumentsAndWriteNothing)
         ndfb_decode_options_init(&decode);
         c.change(decode);
         const std::string out = path(std::string("out ") + c.name);
-        expect_error(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode, &fit_, &write_),
+        expect_error(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode, &fit_, &write_, nullptr, nullptr, nullptr),
                      NDFB_ERROR_INVALID_ARGUMENT, {c.says}, c.name);
         EXPECT_FALSE(fs::exists(out)) << c.name;
     }
@@ -81,27 +81,19 @@ TEST_F(HostileInputs, OptionsOutOfRangeAreInvalidArgumentsAndWriteNothing)
     ndfb_write_options write;
     ndfb_write_options_init(&write);
     write.precision = ndfb_precision(4);
-    expect_error(ndfb_bake(ctx_, input.c_str(), path("out p").c_str(), &decode_, &fit_, &write),
+    expect_error(ndfb_bake(ctx_, input.c_str(), path("out p").c_str(), &decode_, &fit_, &write, nullptr, nullptr, nullptr),
                  NDFB_ERROR_INVALID_ARGUMENT, {"unknown precision"}, "precision");
     ndfb_write_options_init(&write);
     write.struct_size = 2;
-    expect_error(ndfb_bake(ctx_, input.c_str(), path("out s").c_str(), &decode_, &fit_, &write),
+    expect_error(ndfb_bake(ctx_, input.c_str(), path("out s").c_str(), &decode_, &fit_, &write, nullptr, nullptr, nullptr),
                  NDFB_ERROR_INVALID_ARGUMENT, {"write options.struct_size is not set"}, "write struct_size");
     // A colour image of another size: refused before anything is written.
     const std::string color = synth_png("color.png", 4);
     ndfb_write_options_init(&write);
     write.color_path = color.c_str();
-    expect_error(ndfb_bake(ctx_, input.c_str(), path("out c").c_str(), &decode_, &fit_, &write),
+    expect_error(ndfb_bake(ctx_, input.c_str(), path("out c").c_str(), &decode_, &fit_, &write, nullptr, nullptr, nullptr),
                  NDFB_ERROR_INVALID_ARGUMENT, {"colour image '" + color + "' is 4x4, the normal map is 8x8"}, "colour");
     EXPECT_TRUE(listing(path("out c")).empty());
-
-    // A caller built before max_memory_bytes existed passes a shorter struct: the field's bytes
-    // (here a 1-byte limit that would refuse any bake) are not read.
-    ndfb_fit_options old;
-    ndfb_fit_options_init(&old);
-    old.struct_size = uint32_t(offsetof(ndfb_fit_options, max_memory_bytes));
-    old.max_memory_bytes = 1;
-    EXPECT_EQ(ndfb_bake(ctx_, input.c_str(), path("out old").c_str(), &decode_, &old, &write_), NDFB_OK) << error();
 }
 
 // Memory that ends where an inaccessible page begins: a struct placed at its end with struct_size
@@ -145,8 +137,8 @@ private:
     std::_Exit(int(status));
 }
 
-// ndfbake.h: the library "reads only the fields the caller has". A struct shorter than its first
-// ABI-1 layout holds fields the library must read, so it is refused, naming the struct, before
+// ndfbake.h: the library "reads only the fields the caller has". A struct shorter than its layout
+// in minor version 0 of the ABI holds fields the library must read, so it is refused, naming the struct, before
 // any of them is: each call runs in a child (EXPECT_EXIT) with the struct against a guard page,
 // where reading past struct_size would end it with SIGSEGV instead of exit code 1.
 TEST_F(HostileInputs, OptionStructsShorterThanTheirFirstLayoutAreRefusedUnread)
@@ -157,7 +149,7 @@ TEST_F(HostileInputs, OptionStructsShorterThanTheirFirstLayoutAreRefusedUnread)
     ndfb_normal_map map = nullptr;
     ASSERT_EQ(ndfb_normal_map_from_pixels(ctx_, pixels, 3, 1, 1, 3, 0, &decode_, &map), NDFB_OK) << error();
     ndfb_pyramid pyramid = nullptr;
-    ASSERT_EQ(ndfb_fit(ctx_, map, &fit_, &pyramid), NDFB_OK) << error();
+    ASSERT_EQ(ndfb_fit(ctx_, map, &fit_, nullptr, nullptr, &pyramid), NDFB_OK) << error();
     ndfb_bench_options bench;
     ndfb_bench_options_init(&bench);
     ndfb_space_options space;
@@ -172,26 +164,26 @@ TEST_F(HostileInputs, OptionStructsShorterThanTheirFirstLayoutAreRefusedUnread)
                     ExitedWithCode(inval), "decode options.struct_size is not set: call ndfb_decode_options_init")
             << bytes << " bytes";
     }
-    for (size_t bytes : {sizeof(uint32_t), offsetof(ndfb_fit_options, threads), offsetof(ndfb_fit_options, progress_user)}) {
+    for (size_t bytes : {sizeof(uint32_t), offsetof(ndfb_fit_options, threads), offsetof(ndfb_fit_options, refine)}) {
         const auto* f = guarded.place(fit_, bytes);
         ndfb_pyramid scratch = nullptr;
-        EXPECT_EXIT(exit_with(ctx_, ndfb_fit(ctx_, map, f, &scratch)), ExitedWithCode(inval),
+        EXPECT_EXIT(exit_with(ctx_, ndfb_fit(ctx_, map, f, nullptr, nullptr, &scratch)), ExitedWithCode(inval),
                     "fit options.struct_size is not set: call ndfb_fit_options_init")
             << bytes << " bytes";
     }
-    for (size_t bytes : {sizeof(uint32_t), offsetof(ndfb_write_options, source_name)}) {
+    for (size_t bytes : {sizeof(uint32_t), offsetof(ndfb_write_options, mipmap)}) {
         const auto* w = guarded.place(write_, bytes);
-        EXPECT_EXIT(exit_with(ctx_, ndfb_pyramid_write(ctx_, pyramid, map, out.c_str(), &fit_, w)),
+        EXPECT_EXIT(exit_with(ctx_, ndfb_pyramid_write(ctx_, pyramid, map, out.c_str(), w, nullptr, nullptr, nullptr)),
                     ExitedWithCode(inval), "write options.struct_size is not set: call ndfb_write_options_init")
             << bytes << " bytes";
     }
-    for (size_t bytes : {sizeof(uint32_t), offsetof(ndfb_bench_options, progress_user)}) {
+    for (size_t bytes : {sizeof(uint32_t), offsetof(ndfb_bench_options, threads)}) {
         const auto* b = guarded.place(bench, bytes);
-        EXPECT_EXIT(exit_with(ctx_, ndfb_bench(ctx_, b, out.c_str())), ExitedWithCode(inval),
+        EXPECT_EXIT(exit_with(ctx_, ndfb_bench(ctx_, b, out.c_str(), nullptr, nullptr)), ExitedWithCode(inval),
                     "bench options.struct_size is not set: call ndfb_bench_options_init")
             << bytes << " bytes";
     }
-    for (size_t bytes : {sizeof(uint32_t), offsetof(ndfb_space_options, threads)}) {
+    for (size_t bytes : {sizeof(uint32_t), offsetof(ndfb_space_options, frame_normal)}) {
         const auto* o = guarded.place(space, bytes);
         float in[3] = {0, 0, 1}, converted[3];
         EXPECT_EXIT(exit_with(ctx_, ndfb_object_to_tangent(ctx_, nullptr, nullptr, 0, in, 1, 1, 3, o, converted, nullptr)),
@@ -200,14 +192,14 @@ TEST_F(HostileInputs, OptionStructsShorterThanTheirFirstLayoutAreRefusedUnread)
     }
     EXPECT_FALSE(fs::exists(out));
 
-    // The first layouts themselves, against the guard: accepted, and the fields added since
-    // (max_memory_bytes..refine, atlas) are not read, so this runs in the test's own process.
-    const auto* first_fit = guarded.place(fit_, offsetof(ndfb_fit_options, max_memory_bytes));
+    // The layouts of minor version 0 themselves, against the guard: accepted, and nothing past
+    // them is read, so this runs in the test's own process.
+    const auto* first_fit = guarded.place(fit_, sizeof(ndfb_fit_options));
     ndfb_pyramid refit = nullptr;
-    EXPECT_EQ(ndfb_fit(ctx_, map, first_fit, &refit), NDFB_OK) << error();
+    EXPECT_EQ(ndfb_fit(ctx_, map, first_fit, nullptr, nullptr, &refit), NDFB_OK) << error();
     ndfb_pyramid_destroy(refit);
-    const auto* first_write = guarded.place(write_, offsetof(ndfb_write_options, atlas));
-    EXPECT_EQ(ndfb_pyramid_write(ctx_, pyramid, map, out.c_str(), &fit_, first_write), NDFB_OK) << error();
+    const auto* first_write = guarded.place(write_, sizeof(ndfb_write_options));
+    EXPECT_EQ(ndfb_pyramid_write(ctx_, pyramid, map, out.c_str(), first_write, nullptr, nullptr, nullptr), NDFB_OK) << error();
     ndfb_pyramid_destroy(pyramid);
     ndfb_normal_map_destroy(map);
 }
@@ -220,7 +212,7 @@ TEST_F(HostileInputs, NullHandlesNullBuffersAndWrongSizesAreErrors)
     ndfb_normal_map map = nullptr;
     ASSERT_EQ(ndfb_normal_map_load(ctx_, input.c_str(), &decode_, &map), NDFB_OK);
     ndfb_pyramid pyramid = nullptr;
-    ASSERT_EQ(ndfb_fit(ctx_, map, &fit_, &pyramid), NDFB_OK);
+    ASSERT_EQ(ndfb_fit(ctx_, map, &fit_, nullptr, nullptr, &pyramid), NDFB_OK);
     std::vector<float> buffer(8 * 8 * 4);
     float direction[3] = {0, 0, 1}, value = 0;
     const ndfb_status inval = NDFB_ERROR_INVALID_ARGUMENT;
@@ -231,9 +223,9 @@ TEST_F(HostileInputs, NullHandlesNullBuffersAndWrongSizesAreErrors)
     // A null context: refused (there is no context to hold the message).
     EXPECT_EQ(ndfb_normal_map_load(nullptr, input.c_str(), &decode_, &scratch), inval);
     EXPECT_EQ(ndfb_normal_map_from_pixels(nullptr, buffer.data(), 12, 2, 2, 3, 0, nullptr, &scratch), inval);
-    EXPECT_EQ(ndfb_fit(nullptr, map, &fit_, &scratch_pyramid), inval);
-    EXPECT_EQ(ndfb_bake(nullptr, input.c_str(), path("o").c_str(), nullptr, &fit_, nullptr), inval);
-    EXPECT_EQ(ndfb_pyramid_write(nullptr, pyramid, map, path("o").c_str(), &fit_, nullptr), inval);
+    EXPECT_EQ(ndfb_fit(nullptr, map, &fit_, nullptr, nullptr, &scratch_pyramid), inval);
+    EXPECT_EQ(ndfb_bake(nullptr, input.c_str(), path("o").c_str(), nullptr, &fit_, nullptr, nullptr, nullptr, nullptr), inval);
+    EXPECT_EQ(ndfb_pyramid_write(nullptr, pyramid, map, path("o").c_str(), nullptr, nullptr, nullptr, nullptr), inval);
     EXPECT_EQ(ndfb_pyramid_level_stats(nullptr, pyramid, 0, NDFB_BRDF_GGX, 0.5f, 1, nullptr), inval);
     EXPECT_EQ(ndfb_effective_brdf_reference(nullptr, map, NDFB_WRAP_REPEAT, 0, 0, 0, NDFB_BRDF_GGX, 0.5f, direction,
                                             1, &value),
@@ -255,13 +247,13 @@ TEST_F(HostileInputs, NullHandlesNullBuffersAndWrongSizesAreErrors)
     expect_error(ndfb_normal_map_load(ctx_, nullptr, &decode_, &scratch), inval, {"must not be null"}, "path");
     expect_error(ndfb_normal_map_from_pixels(ctx_, nullptr, 12, 2, 2, 3, 0, nullptr, &scratch), inval,
                  {"must not be null"}, "pixels");
-    expect_error(ndfb_fit(ctx_, nullptr, &fit_, &scratch_pyramid), inval, {"must not be null"}, "map");
-    expect_error(ndfb_fit(ctx_, map, nullptr, &scratch_pyramid), inval, {"fit options is null"}, "fit options");
-    expect_error(ndfb_bake(ctx_, input.c_str(), path("o").c_str(), &decode_, nullptr, nullptr), inval,
+    expect_error(ndfb_fit(ctx_, nullptr, &fit_, nullptr, nullptr, &scratch_pyramid), inval, {"must not be null"}, "map");
+    expect_error(ndfb_fit(ctx_, map, nullptr, nullptr, nullptr, &scratch_pyramid), inval, {"fit options is null"}, "fit options");
+    expect_error(ndfb_bake(ctx_, input.c_str(), path("o").c_str(), &decode_, nullptr, nullptr, nullptr, nullptr, nullptr), inval,
                  {"must not be null"}, "bake fit");
-    expect_error(ndfb_bake(ctx_, input.c_str(), nullptr, &decode_, &fit_, nullptr), inval, {"must not be null"},
+    expect_error(ndfb_bake(ctx_, input.c_str(), nullptr, &decode_, &fit_, nullptr, nullptr, nullptr, nullptr), inval, {"must not be null"},
                  "bake out");
-    expect_error(ndfb_pyramid_write(ctx_, nullptr, map, path("o").c_str(), &fit_, nullptr), inval,
+    expect_error(ndfb_pyramid_write(ctx_, nullptr, map, path("o").c_str(), nullptr, nullptr, nullptr, nullptr), inval,
                  {"pyramid is null"}, "write pyramid");
     expect_error(ndfb_pyramid_level_stats(ctx_, pyramid, 0, NDFB_BRDF_GGX, 0.5f, 1, nullptr), inval,
                  {"must not be null"}, "stats out");
@@ -325,7 +317,7 @@ TEST_F(HostileInputs, NullHandlesNullBuffersAndWrongSizesAreErrors)
     expect_error(ndfb_synthesize(ctx_, "fbm", 0, 4, 0, &scratch), inval, {"texels per side"}, "pattern size");
     ndfb_normal_map other = nullptr;
     ASSERT_EQ(ndfb_synthesize(ctx_, "fbm", 4, 4, 0, &other), NDFB_OK);
-    expect_error(ndfb_pyramid_write(ctx_, pyramid, other, path("o").c_str(), &fit_, nullptr), inval,
+    expect_error(ndfb_pyramid_write(ctx_, pyramid, other, path("o").c_str(), nullptr, nullptr, nullptr, nullptr), inval,
                  {"the pyramid was fitted to a map of another size"}, "write map size");
     expect_error(ndfb_texel_error(ctx_, other, pyramid, NDFB_REPR_VMF_MIXTURE, NDFB_WRAP_REPEAT, 0, 0, 0,
                                   NDFB_BRDF_GGX, 0.5f, &value),
@@ -363,8 +355,7 @@ TEST_F(HostileInputs, AFailedCallLeavesItsOutputHandleNull)
     ASSERT_EQ(ndfb_context_create(&dead), NDFB_OK);
     ndfb_context_destroy(dead);
     const float pixels[3] = {0.5f, 0.5f, 1.0f};
-    ndfb_fit_options cancelling = fit_;
-    cancelling.progress = +[](void*, const char*, float) -> int { return 1; };
+    const ndfb_progress_fn cancel = +[](void*, const char*, float) -> int { return 1; };
 
     // A value no call returns: a failure must overwrite it.
     const auto stale_map = reinterpret_cast<ndfb_normal_map>(0x1);
@@ -381,7 +372,7 @@ TEST_F(HostileInputs, AFailedCallLeavesItsOutputHandleNull)
         EXPECT_NE(ndfb_synthesize(ctx, "plaid", 4, 4, 0, &m), NDFB_OK);
         EXPECT_EQ(m, nullptr) << "synthesize, " << which;
         ndfb_pyramid p = stale_pyramid;
-        EXPECT_NE(ndfb_fit(ctx, nullptr, &fit_, &p), NDFB_OK);
+        EXPECT_NE(ndfb_fit(ctx, nullptr, &fit_, nullptr, nullptr, &p), NDFB_OK);
         EXPECT_EQ(p, nullptr) << "fit, " << which;
     }
     // Failures after the arguments were accepted: a missing file, a cancelled fit.
@@ -389,7 +380,7 @@ TEST_F(HostileInputs, AFailedCallLeavesItsOutputHandleNull)
     EXPECT_EQ(ndfb_normal_map_load(ctx_, path("missing.png").c_str(), &decode_, &m), NDFB_ERROR_FILE_NOT_FOUND);
     EXPECT_EQ(m, nullptr);
     ndfb_pyramid p = stale_pyramid;
-    EXPECT_EQ(ndfb_fit(ctx_, map, &cancelling, &p), NDFB_ERROR_CANCELLED);
+    EXPECT_EQ(ndfb_fit(ctx_, map, &fit_, cancel, nullptr, &p), NDFB_ERROR_CANCELLED);
     EXPECT_EQ(p, nullptr);
     ndfb_normal_map_destroy(map);
 }
@@ -407,8 +398,8 @@ TEST_F(HostileInputs, ADestroyedContextIsRefusedNotUsed)
     ndfb_normal_map other = nullptr;
     ndfb_pyramid pyramid = nullptr;
     EXPECT_EQ(ndfb_normal_map_load(dead, input.c_str(), &decode_, &other), NDFB_ERROR_INVALID_ARGUMENT);
-    EXPECT_EQ(ndfb_fit(dead, map, &fit_, &pyramid), NDFB_ERROR_INVALID_ARGUMENT);
-    EXPECT_EQ(ndfb_bake(dead, input.c_str(), path("out").c_str(), &decode_, &fit_, &write_),
+    EXPECT_EQ(ndfb_fit(dead, map, &fit_, nullptr, nullptr, &pyramid), NDFB_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(ndfb_bake(dead, input.c_str(), path("out").c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr),
               NDFB_ERROR_INVALID_ARGUMENT);
     EXPECT_EQ(ndfb_synthesize(dead, "fbm", 4, 4, 0, &other), NDFB_ERROR_INVALID_ARGUMENT);
     EXPECT_EQ(ndfb_tangents(dead, nullptr, 0, nullptr, 0, nullptr, 0), NDFB_ERROR_INVALID_ARGUMENT);
@@ -421,7 +412,7 @@ TEST_F(HostileInputs, ADestroyedContextIsRefusedNotUsed)
     // Objects made through it outlive it, and other contexts are unaffected.
     uint32_t w = 0, h = 0;
     EXPECT_EQ(ndfb_normal_map_size(map, &w, &h), NDFB_OK);
-    EXPECT_EQ(ndfb_fit(ctx_, map, &fit_, &pyramid), NDFB_OK) << error();
+    EXPECT_EQ(ndfb_fit(ctx_, map, &fit_, nullptr, nullptr, &pyramid), NDFB_OK) << error();
     ndfb_pyramid_destroy(pyramid);
     ndfb_normal_map_destroy(map);
 }

@@ -55,7 +55,7 @@ TEST_F(HostileInputs, ABakeOverTheMemoryLimitIsRefusedUpFrontWithTheEstimate)
     ASSERT_EQ(ndfb_synthesize(ctx_, "bumps", 512, 512, 1, &map), NDFB_OK);
     fit_.max_memory_bytes = 1ull << 20;
     ndfb_pyramid pyramid = reinterpret_cast<ndfb_pyramid>(0x1);
-    expect_error(ndfb_fit(ctx_, map, &fit_, &pyramid), NDFB_ERROR_OUT_OF_MEMORY,
+    expect_error(ndfb_fit(ctx_, map, &fit_, nullptr, nullptr, &pyramid), NDFB_ERROR_OUT_OF_MEMORY,
                  {"cannot fit the map", "512 x 512", "over the memory limit of 1048576 bytes"}, "fit limit");
     EXPECT_EQ(pyramid, nullptr);
     ndfb_normal_map_destroy(map);
@@ -63,7 +63,7 @@ TEST_F(HostileInputs, ABakeOverTheMemoryLimitIsRefusedUpFrontWithTheEstimate)
     // Within the limit: the bake runs and its report gives the estimate and the measured peak.
     fit_.max_memory_bytes = 1ull << 30;
     const std::string input = synth_png("ok.png", 32);
-    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), path("ok").c_str(), &decode_, &fit_, &write_), NDFB_OK) << error();
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), path("ok").c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK) << error();
     const std::string report = read_bytes(path("ok/report.json"));
     for (const char* key : {"\"peak_memory_bytes\": ", "\"estimated_memory_bytes\": ", "\"memory_limit_bytes\": 1073741824"})
         EXPECT_NE(report.find(key), std::string::npos) << key;
@@ -156,7 +156,7 @@ TEST_F(HostileInputs, ExrWithNanInfNegativeAndHugeValuesIsRepairedAndCounted)
 
     for (const char* name : {"float.exr", "half.exr", "xy.exr"}) {
         const std::string out = path(std::string("out-") + name);
-        ASSERT_EQ(ndfb_bake(ctx_, path(name).c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_OK)
+        ASSERT_EQ(ndfb_bake(ctx_, path(name).c_str(), out.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK)
             << name << ": " << error();
         const std::string report = read_bytes(out + "/report.json");
         EXPECT_EQ(report.find("\"non_finite\": 0,"), std::string::npos) << name << ": repairs not reported";
@@ -206,7 +206,7 @@ TEST_F(HostileInputs, HorizonNormalsGiveFiniteErrorsUnderEveryBrdf)
         fit_.max_lobes = 8;
         fit_.max_iterations = 16;
         ndfb_pyramid pyramid = nullptr;
-        ASSERT_EQ(ndfb_fit(ctx_, map, &fit_, &pyramid), NDFB_OK) << error();
+        ASSERT_EQ(ndfb_fit(ctx_, map, &fit_, nullptr, nullptr, &pyramid), NDFB_OK) << error();
         for (uint32_t level = 1; level < ndfb_pyramid_level_count(pyramid); ++level) {
             float value = -1.0f;
             ASSERT_EQ(ndfb_texel_error(ctx_, map, pyramid, NDFB_REPR_VMF_MIXTURE, NDFB_WRAP_REPEAT, level, 0, 0,
@@ -262,7 +262,7 @@ TEST_F(HostileInputs, PathsWithSpacesAndNonAsciiCharactersWork)
     const std::string input = folder + "/normal map é ü.png";
     write_normal_map(input, synthesize(Pattern::bumps, 16, 16));
     const std::string out = path("out folder/résultat 出力");
-    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_OK) << error();
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK) << error();
     EXPECT_TRUE(fs::exists(out + "/level00_lobe0.exr"));
     EXPECT_NE(read_bytes(out + "/report.json").find("normal map é ü.png"), std::string::npos);
     char text[4096];
@@ -288,7 +288,7 @@ TEST_F(HostileInputs, PathsWithSpacesAndNonAsciiCharactersWork)
     // byte replaced by U+FFFD.
     const std::string latin1 = path("carte \xe9.png");
     write_normal_map(latin1, synthesize(Pattern::bumps, 8, 8));
-    ASSERT_EQ(ndfb_bake(ctx_, latin1.c_str(), path("latin1").c_str(), &decode_, &fit_, &write_), NDFB_OK) << error();
+    ASSERT_EQ(ndfb_bake(ctx_, latin1.c_str(), path("latin1").c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK) << error();
     const std::string report = read_bytes(path("latin1") + "/report.json");
     EXPECT_NE(report.find("carte \\ufffd.png"), std::string::npos);
     EXPECT_EQ(report.find('\xe9'), std::string::npos);

@@ -95,12 +95,12 @@ TEST(HostileChild, DISABLED_Bake)
     std::set<std::string> before;
     std::string report;
     if (!earlier.empty()) {
-        if (ndfb_bake(ctx, earlier.c_str(), out.c_str(), nullptr, &fit, nullptr) != NDFB_OK)
+        if (ndfb_bake(ctx, earlier.c_str(), out.c_str(), nullptr, &fit, nullptr, nullptr, nullptr, nullptr) != NDFB_OK)
             problems += std::string(" [the earlier bake failed: ") + ndfb_last_error(ctx) + "]";
         before = entries(out);
         report = read_bytes(out + "/report.json");
     }
-    const ndfb_status status = ndfb_bake(ctx, input.c_str(), out.c_str(), nullptr, &fit, nullptr);
+    const ndfb_status status = ndfb_bake(ctx, input.c_str(), out.c_str(), nullptr, &fit, nullptr, nullptr, nullptr, nullptr);
     std::string message = ndfb_last_error(ctx);
     if (entries(out) != before) message += " [the folder's files changed]";
     if (!earlier.empty() && read_bytes(out + "/report.json") != report) message += " [the earlier report changed]";
@@ -126,9 +126,9 @@ TEST_F(HostileInputs, AnOutputPathThatCannotBeAFolderIsAnIoError)
 {
     const std::string input = synth_png("in.png", 16);
     const std::string under_file = input + "/out";
-    expect_error(ndfb_bake(ctx_, input.c_str(), under_file.c_str(), &decode_, &fit_, &write_), NDFB_ERROR_IO,
+    expect_error(ndfb_bake(ctx_, input.c_str(), under_file.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_ERROR_IO,
                  {"output folder '" + under_file + "' is not writable"}, "folder under a file");
-    expect_error(ndfb_bake(ctx_, input.c_str(), input.c_str(), &decode_, &fit_, &write_), NDFB_ERROR_IO,
+    expect_error(ndfb_bake(ctx_, input.c_str(), input.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_ERROR_IO,
                  {"output folder '" + input + "' is not writable"}, "folder is a file");
     EXPECT_EQ(read_bytes(input).substr(1, 3), "PNG");  // untouched
 }

@@ -112,7 +112,7 @@ TEST_F(LobeAtlasBake, TheAtlasHoldsEveryLevelFileAndTheReportGivesItsLayout)
     const std::string input = synth_file(Pattern::weave, 32, 16, "weave.png");
     const std::string out = path("out");
     write_.atlas = 1;
-    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK) << ndfb_last_error(ctx_);
     std::vector<LevelSize> sizes;
     for (int l = 0; l < 6; ++l) sizes.push_back({std::max(1, 32 >> l), std::max(1, 16 >> l)});
     const AtlasLayout layout = atlas_layout(sizes);

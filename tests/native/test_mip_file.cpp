@@ -111,7 +111,7 @@ TEST_F(MipFileBake, EveryLevelIsTheFittedLevelAndTheHeaderDescribesIt)
     const std::string input = synth_file(Pattern::fbm, 200, 72, "fbm.png");
     const std::string out = path("out");
     write_.mipmap = 1;
-    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK) << ndfb_last_error(ctx_);
     const int chain = level_count(200, 72);
     ASSERT_EQ(chain, 9);
     for (int lobe = 0; lobe < 4; ++lobe) {
@@ -163,7 +163,7 @@ TEST_F(MipFileBake, LevelsPastTheFittedOnesAreFootprintWeightedAverages)
     write_.precision = NDFB_PRECISION_FLOAT;
     fit_.max_levels = 2;
     fit_.wrap = NDFB_WRAP_CLAMP;
-    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK) << ndfb_last_error(ctx_);
     OIIO::ImageSpec spec;
     const std::vector<Level> levels = read_mip_levels(mip_file(out, 0), &spec);
     ASSERT_EQ(levels.size(), 6u);  // 24x20, 12x10, 6x5, 3x3, 2x2, 1x1
@@ -202,7 +202,7 @@ TEST_F(MipFileBake, TheTextureSystemsTrilinearLookupAtAFittedLevelsTexelReturnsI
     const std::string out = path("out");
     write_.mipmap = 1;
     write_.precision = NDFB_PRECISION_FLOAT;
-    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_), NDFB_OK) << ndfb_last_error(ctx_);
+    ASSERT_EQ(ndfb_bake(ctx_, input.c_str(), out.c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK) << ndfb_last_error(ctx_);
     // The shared texture system, never destroyed here: OpenImageIO 2.4's TextureSystem::destroy
     // deletes through the base class with a sized delete, which AddressSanitizer reports as a
     // new-delete-type-mismatch inside OpenImageIO.

@@ -92,7 +92,7 @@ protected:
 
     ndfb_status bake_into(const fs::path& folder)
     {
-        return ndfb_bake_map(ctx_, map_, utf8(folder).c_str(), &fit_, &write_);
+        return ndfb_bake_map(ctx_, map_, utf8(folder).c_str(), &fit_, &write_, nullptr, nullptr, nullptr);
     }
 
     fs::path root_;
@@ -161,7 +161,7 @@ TEST_F(Utf8Paths, APathThatIsNotUtf8IsRefusedOnWindows)
 {
 #if defined(_WIN32)
     const std::string folder = utf8(root_) + "\\Zo\xeb";
-    ASSERT_EQ(ndfb_bake_map(ctx_, map_, folder.c_str(), &fit_, &write_), NDFB_ERROR_INVALID_ARGUMENT);
+    ASSERT_EQ(ndfb_bake_map(ctx_, map_, folder.c_str(), &fit_, &write_, nullptr, nullptr, nullptr), NDFB_ERROR_INVALID_ARGUMENT);
     EXPECT_NE(std::string(ndfb_last_error(ctx_)).find("is not UTF-8"), std::string::npos) << ndfb_last_error(ctx_);
     EXPECT_TRUE(fs::is_empty(root_));
 #else
@@ -178,13 +178,13 @@ TEST_F(Utf8Paths, ImageFilesWithNonAsciiNamesAreReadAndWritten)
     ASSERT_TRUE(fs::is_regular_file(image));
     const fs::path folder = root_ / from_utf8(u8"Zoë") / from_utf8(u8"出力");
     write_.source_name = nullptr;  // the file's name
-    ASSERT_EQ(ndfb_bake(ctx_, utf8(image).c_str(), utf8(folder).c_str(), &decode_, &fit_, &write_), NDFB_OK)
+    ASSERT_EQ(ndfb_bake(ctx_, utf8(image).c_str(), utf8(folder).c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr), NDFB_OK)
         << ndfb_last_error(ctx_);
     EXPECT_NE(read_bytes(folder / "report.json").find(chars(u8"材質.png")), std::string::npos);
 
     // A missing input is named in UTF-8 too.
     const fs::path missing = root_ / from_utf8(u8"Zoë") / from_utf8(u8"fehlt-ü.png");
-    ASSERT_EQ(ndfb_bake(ctx_, utf8(missing).c_str(), utf8(folder).c_str(), &decode_, &fit_, &write_),
+    ASSERT_EQ(ndfb_bake(ctx_, utf8(missing).c_str(), utf8(folder).c_str(), &decode_, &fit_, &write_, nullptr, nullptr, nullptr),
               NDFB_ERROR_FILE_NOT_FOUND);
     EXPECT_NE(std::string(ndfb_last_error(ctx_)).find(utf8(missing)), std::string::npos) << ndfb_last_error(ctx_);
 }

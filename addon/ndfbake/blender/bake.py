@@ -53,7 +53,7 @@ from dataclasses import dataclass
 
 import bpy
 
-from ..core import bake_job, folder_names, native, native_abi
+from ..core import bake_job, folder_names, native
 from ..core.bake_job import BakeError  # noqa: F401  (bake.BakeError: what every caller catches)
 from ..shading import bake_record, material_scan, nodes, osl_group, scene_lod
 from . import bake_finish, bake_revert, image_pixels, lobe_folders
@@ -65,7 +65,7 @@ revert = bake_revert.revert  # bake.revert: Revert (bake_revert.py)
 
 @dataclass
 class BakeSettings:
-    max_lobes: int = 4          # 1..8 lobes per texel
+    max_lobes: int = None       # lobes per texel at most; None: the library's default (native.Library)
     tolerance: float = 0.0      # relative effective-BRDF error a texel may keep (0: max_lobes everywhere)
     refine: bool = False        # refine the lobes for the material's roughness (100-300x the fit time)
     threads: int = 0            # 0: every core
@@ -132,10 +132,12 @@ def prepare(material, settings=None):
     scan = material_scan.scan(material)
     if not scan.ok:
         raise BakeError(scan.problem.code, scan.problem.message)
-    if not 1 <= settings.max_lobes <= native_abi.MAX_LOBES:
-        raise BakeError("BAD_SETTINGS", "maximum lobes must be 1..%d, got %d" % (native_abi.MAX_LOBES, settings.max_lobes))
-    if not 0.0 <= settings.tolerance <= 1.0:
-        raise BakeError("BAD_SETTINGS", "tolerance must be in [0, 1], got %g" % settings.tolerance)
+    roughness = min(max(scan.roughness, 0.01), 1.0)
+    try:  # the library's own check, before any work: the one place the settings are validated
+        with lib.context() as ctx:
+            bake_job.fit_options(ctx, settings, roughness, bake_finish.native_wrap(scan))
+    except native.Error as e:
+        raise BakeError("BAD_SETTINGS", "bad bake settings: %s" % e.message) from None
     if settings.level_of_detail not in ("SCENE", "RENDERER"):
         raise BakeError("BAD_SETTINGS", "level of detail must be SCENE or RENDERER, got %r" % settings.level_of_detail)
     if settings.cycles_lobes not in (nodes.WIDENED, nodes.NARROWED):
@@ -179,7 +181,7 @@ def prepare(material, settings=None):
                             image_path=scan.image_path, pixels=pixels, folder=relative,
                             out_dir=absolute + folder_names.PENDING_SUFFIX, final_dir=absolute,
                             wrap=bake_finish.native_wrap(scan),
-                            roughness=min(max(scan.roughness, 0.01), 1.0), settings=settings,
+                            roughness=roughness, settings=settings,
                             targets=bake_finish.target_names(scan),
                             lod=lod, lod_note=lod_note)
 

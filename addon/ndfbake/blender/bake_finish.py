@@ -5,7 +5,6 @@ bake's nodes) and writes the bake record; on any failure nothing of the material
 changed. Returns a BakeResult."""
 import json
 import os
-import re
 from dataclasses import dataclass, field
 
 import bpy
@@ -45,14 +44,6 @@ def _read_report(out_dir):
             return json.load(f)
     except (OSError, ValueError):
         return {}
-
-
-def _lobe_textures(out_dir, atlas):
-    """The textures the node group samples: atlas_lobeJ.exr, or level00_lobeJ.exr."""
-    prefix = "atlas_lobe" if atlas else "level00_lobe"
-    pattern = re.compile(re.escape(prefix) + r"(\d+)\.exr$")
-    indices = sorted(int(m.group(1)) for m in (pattern.match(n) for n in os.listdir(out_dir)) if m)
-    return [os.path.join(out_dir, "%s%d.exr" % (prefix, j)) for j in indices]
 
 
 def _relative(path):
@@ -147,21 +138,18 @@ def finish(job):
     _check_unchanged(material, job)
     tree = material.node_tree
     lobe_folders.commit_pending(job)
-    report = _read_report(job.out_dir)
+    report = _read_report(job.out_dir)  # its error figures, for the summary
+    output = job.output
     # The cheapest group that does: slots no texel uses (a tolerance left them empty) are all zero.
-    used = report.get("slots_used")
-    paths = [p for j, p in enumerate(_lobe_textures(job.out_dir, job.lod is not None))
-             if used is None or j >= len(used) or used[j]]
-    slots = [j for j, _ in enumerate(_lobe_textures(job.out_dir, job.lod is not None))
-             if used is None or j >= len(used) or used[j]]
+    textures = output.lobe_textures(atlas=job.lod is not None)
+    slots = [j for j in sorted(textures) if output.slots_used[j]]
+    paths = [os.path.join(job.out_dir, textures[j]) for j in slots]
     if not paths:
         raise BakeError("NATIVE_ERROR", "the bake wrote no lobe texture into %s" % job.out_dir)
     atlas = None
     if job.lod is not None:
-        layout = report.get("atlas") or {}
-        if not layout.get("levels"):
-            raise BakeError("NATIVE_ERROR", "report.json in %s has no atlas layout" % job.out_dir)
-        atlas = lod_nodes.AtlasLayout(width=layout["width"], height=layout["height"], levels=layout["levels"])
+        width, height = output.atlas_size
+        atlas = lod_nodes.AtlasLayout(width=width, height=height, levels=output.atlas_frames)
 
     old = bake_record.record(material) or {}
     # The group nodes of the previous bake, by the Principled BSDF they stand for: replaced in place.
@@ -230,7 +218,7 @@ def finish(job):
         bake_revert.remove_nodes(material, {"targets": inserted}, keep_edits=False)
         nodes.remove_unused_groups([name for name in bpy.data.node_groups.keys() if name not in groups_before])
         bake_revert.remove_images(created)
-        folder_names.delete_bake_files(job.out_dir, os.listdir(job.out_dir))
+        folder_names.delete_bake_files(job.out_dir, [f.name for f in output.files])
         raise BakeError("INTERNAL", "building the node group of '%s' failed (%s: %s); the material is as it was "
                         "before this bake" % (material.name, type(e).__name__, e)) from e
 
@@ -265,7 +253,7 @@ def finish(job):
         "lobes": len(images),
         "packed": bool(job.settings.pack),
         "summary": summary,
-        "settings": {"max_lobes": job.settings.max_lobes, "tolerance": job.settings.tolerance,
+        "settings": {"max_lobes": output.slots, "tolerance": job.settings.tolerance,
                      "refine": job.settings.refine, "roughness": job.roughness, "level_of_detail": "SCENE" if job.lod else "RENDERER",
                      "cycles_lobes": job.settings.cycles_lobes, "shader": job.settings.shader},
     }

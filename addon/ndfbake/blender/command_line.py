@@ -33,23 +33,31 @@ import time
 
 import bpy
 
-from ..core import native_abi
+from ..core import native
 from . import bake, lobe_folders
 
 PROG = "blender -c ndfbake FILE.blend"
 
 
-def _bounded(kind, low, high):
-    """An argparse type: `kind` within [low, high], else a usage error (status 2)."""
-    def parse(text):
-        try:
-            value = kind(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError("not a number: %r" % text) from None
-        if not low <= value <= high:
-            raise argparse.ArgumentTypeError("%s is not in %s..%s" % (text, low, high))
-        return value
-    return parse
+def _lobe_help():
+    """--max-lobes' help: the library's limit and default (nothing where it cannot be loaded)."""
+    lib, _ = native.status()
+    limits = " (1..%d, default %d)" % (lib.max_lobes, lib.default_max_lobes) if lib is not None else ""
+    return "vMF lobes per texel at most" + limits
+
+
+def _settings_problem(args):
+    """The library's word on --max-lobes and --tolerance (None where they are fine, or where there
+    is no library: each bake then says so)."""
+    lib, _ = native.status()
+    if lib is None:
+        return None
+    try:
+        with lib.context() as ctx:
+            ctx.fit_options(max_lobes=args.max_lobes, tolerance=args.tolerance)
+    except native.Error as e:
+        return e.message
+    return None
 
 
 def parser(prog):
@@ -59,10 +67,8 @@ def parser(prog):
                                                             "a .blend.")
     parser.add_argument("--material", action="append", default=[], metavar="NAME",
                         help="a material to bake (repeat for several); default: every material the scene needs")
-    parser.add_argument("--max-lobes", type=_bounded(int, 1, native_abi.MAX_LOBES), default=defaults.max_lobes,
-                        help="vMF lobes per texel at most (1..%d, default %d)" % (native_abi.MAX_LOBES,
-                                                                                  defaults.max_lobes))
-    parser.add_argument("--tolerance", type=_bounded(float, 0.0, 1.0), default=defaults.tolerance,
+    parser.add_argument("--max-lobes", type=int, default=defaults.max_lobes, help=_lobe_help())
+    parser.add_argument("--tolerance", type=float, default=defaults.tolerance,
                         help="relative error a texel may keep, 0..1: fewer lobes where it suffices (default %g)"
                              % defaults.tolerance)
     parser.add_argument("--refine", action="store_true",
@@ -104,6 +110,10 @@ def run(argv, prog=PROG):
         args = parser(prog).parse_args(argv)
     except SystemExit as e:  # argparse: --help (0) or bad usage (2)
         return e.code if isinstance(e.code, int) else 2
+    problem = None if args.revert else _settings_problem(args)
+    if problem:
+        print("ndfbake: %s (see --help)" % problem, file=sys.stderr)
+        return 2
     if not bpy.data.filepath:
         print("ndfbake: open a saved .blend first", file=sys.stderr)
         return 2

@@ -5,6 +5,7 @@ import atexit
 
 import bpy
 
+from ..core import native
 from . import command_line, lobe_folders, operators, panel_state, ui
 
 _cli_command = None  # register_cli_command's handle (Blender 4.2+: `blender -c ndfbake`)
@@ -14,6 +15,7 @@ def register():
     global _cli_command
     lobe_folders.install_handlers()
     panel_state.install_handlers()
+    ui.NDFBakeSettings.__annotations__["max_lobes"] = ui.max_lobes_property(native.status()[0])
     for cls in ui.classes + operators.classes:
         bpy.utils.register_class(cls)
     bpy.types.Material.ndfbake_settings = bpy.props.PointerProperty(type=ui.NDFBakeSettings)

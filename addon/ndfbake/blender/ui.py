@@ -4,15 +4,21 @@ import textwrap
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
 
-from ..core import native, native_abi
+from ..core import native
 from ..shading import bake_record, blender_compat, nodes, osl_group
 from . import bake, lobe_folders, operators, panel_state
 
 
+def max_lobes_property(lib):
+    """Maximum Lobes, bounded and defaulted by the library (native.Library.max_lobes and
+    default_max_lobes); without a library, where the panel says why and nothing bakes, 1."""
+    maximum, default = (lib.max_lobes, lib.default_max_lobes) if lib is not None else (1, 1)
+    return IntProperty(name="Maximum Lobes", description="vMF lobes per texel at most (each costs a BSDF in the "
+                       "node group)", default=default, min=1, max=maximum)
+
+
 class NDFBakeSettings(bpy.types.PropertyGroup):
-    max_lobes: IntProperty(name="Maximum Lobes", description="vMF lobes per texel at most (each costs a "
-                           "BSDF in the node group)", default=bake.BakeSettings.max_lobes, min=1,
-                           max=native_abi.MAX_LOBES)
+    # max_lobes: max_lobes_property(), set by registration.register() from the library
     tolerance: FloatProperty(name="Tolerance", description="Relative effective-BRDF error a texel may keep: "
                              "fewer lobes where it suffices (0: the maximum everywhere)",
                              default=0.0, min=0.0, max=1.0, precision=3, step=1)

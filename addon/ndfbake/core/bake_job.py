@@ -52,6 +52,7 @@ class BakeJob:
         self.fraction = 0.0
         self.seconds = 0.0
         self.error = None        # BakeError after a failed run
+        self.output = None       # bake_output.BakeOutput after a successful run: what the library wrote
         self._cancel = threading.Event()
         self._thread = None
         self._done = threading.Event()
@@ -106,11 +107,10 @@ class BakeJob:
                 raise native.Error(native_abi.ERROR_CANCELLED, "NDFB_ERROR_CANCELLED", "cancelled before it started")
             p = self.pixels
             with lib.context() as ctx, ctx.normal_map(p.data, p.width, p.height, p.channels, p.signed) as normal_map:
-                ctx.bake(normal_map, self.out_dir, source_name=self.image_path, max_lobes=self.settings.max_lobes,
-                         tolerance=self.settings.tolerance, roughness=self.roughness, wrap=self.wrap,
-                         refine=self.settings.refine, threads=self.settings.threads, progress=callback,
-                         max_levels=self.lod.levels if self.lod and self.settings.shader != "OSL" else 0,
-                         atlas=self.lod is not None, mipmap=self.settings.shader == "OSL")
+                fit = fit_options(ctx, self.settings, self.roughness, self.wrap,
+                                  max_levels=self.lod.levels if self.lod and self.settings.shader != "OSL" else 0)
+                self.output = ctx.bake(normal_map, self.out_dir, fit, source_name=self.image_path, progress=callback,
+                                       atlas=self.lod is not None, mipmap=self.settings.shader == "OSL")
         except native.Error as e:
             if not existed:
                 folder_names.delete_bake_files(self.out_dir, [])  # the empty folder, if the library left it
@@ -135,6 +135,13 @@ class BakeJob:
     def join(self, timeout=None):
         if self._thread is not None:
             self._thread.join(timeout)
+
+
+def fit_options(ctx, settings, roughness, wrap, max_levels=0):
+    """The library's fit options for a bake's settings, checked by the library (native.Error names
+    a bad one): where Maximum Lobes and the tolerance are validated, and the only place."""
+    return ctx.fit_options(max_lobes=settings.max_lobes, tolerance=settings.tolerance, roughness=roughness,
+                           wrap=wrap, refine=settings.refine, threads=settings.threads, max_levels=max_levels)
 
 
 def _bake_error(error, job):

@@ -6,6 +6,8 @@ import hashlib
 import os
 import re
 
+from . import native
+
 FOLDER_SUFFIX = ".ndfbake"
 PENDING_SUFFIX = ".pending"
 
@@ -37,8 +39,10 @@ def path_key(path):
 
 
 def is_bake_file(name):
-    return name in ("report.json", "ndfbake.glsl") or re.fullmatch(
-        r"level\d+_(lobe|color)\d+\.exr|(atlas|mip)_lobe\d+\.exr", name) is not None
+    """Whether the library writes files so named (ndfb_is_bake_file). Without a usable library: no
+    file is, so nothing is deleted."""
+    lib, _ = native.status()
+    return lib is not None and lib.is_bake_file(name)
 
 
 def taken_on_disk(absolute):

@@ -22,9 +22,10 @@ import os
 import sys
 import threading
 
-from .native_abi import (ABI_VERSION, BRDF_GGX, CONVENTION_OPENGL, ERROR_INVALID_ARGUMENT, OK,
-                         PER_CORNER, PER_VERTEX, PROGRESS_FN, WRAP_REPEAT, DecodeOptions, FitOptions, Mesh,
-                         WriteOptions)
+from . import bake_output
+from .native_abi import (ABI_MAJOR, ABI_MINOR, BRDF_GGX, CONVENTION_OPENGL, ERROR_INVALID_ARGUMENT, OK,
+                         PER_CORNER, PER_VERTEX, PROGRESS_FN, WRAP_REPEAT, AtlasFrame, BakeFile, DecodeOptions,
+                         FitOptions, Mesh, WriteOptions)
 
 # The library's file on each platform (each platform's extension zip carries its own).
 if sys.platform == "win32":
@@ -75,7 +76,7 @@ def candidate_paths():
 class Library:
     """The loaded library with the signatures this add-on calls declared."""
 
-    def __init__(self, path, expected_abi=ABI_VERSION):
+    def __init__(self, path, expected_abi=ABI_MAJOR):
         try:
             lib = ctypes.CDLL(path)
         except OSError as e:
@@ -93,8 +94,16 @@ class Library:
         self.path = path
         self.lib = lib
         self._declare()
+        minor = lib.ndfb_abi_minor()
+        if minor < ABI_MINOR:
+            raise LibraryError("the native library %s has ABI version %d.%d, this add-on needs %d.%d or later; "
+                               "install the add-on zip built with that library" % (path, abi, minor, abi, ABI_MINOR))
         self.version = lib.ndfb_version().decode()
         self._check_struct_sizes()
+        # The library's limit and default of Maximum Lobes: the panel, the command line and the
+        # bake take them from here.
+        self.max_lobes = int(lib.ndfb_max_lobes())
+        self.default_max_lobes = int(self.init_options(FitOptions, lib.ndfb_fit_options_init).max_lobes)
 
     def _declare(self):
         lib = self.lib
@@ -102,6 +111,8 @@ class Library:
         vp = c.c_void_p
         sig = {
             "ndfb_version": (c.c_char_p, []),
+            "ndfb_abi_minor": (c.c_uint32, []),
+            "ndfb_max_lobes": (c.c_uint32, []),
             "ndfb_context_create": (c.c_int, [c.POINTER(vp)]),
             "ndfb_context_destroy": (None, [vp]),
             "ndfb_last_error": (c.c_char_p, [vp]),
@@ -111,7 +122,19 @@ class Library:
             "ndfb_write_options_init": (None, [c.POINTER(WriteOptions)]),
             "ndfb_normal_map_from_pixels": (c.c_int, [vp, c.POINTER(c.c_float), c.c_size_t, c.c_uint32, c.c_uint32,
                                                       c.c_uint32, c.c_int32, c.POINTER(DecodeOptions), c.POINTER(vp)]),
-            "ndfb_bake_map": (c.c_int, [vp, vp, c.c_char_p, c.POINTER(FitOptions), c.POINTER(WriteOptions)]),
+            "ndfb_fit_options_check": (c.c_int, [vp, c.POINTER(FitOptions)]),
+            "ndfb_bake_map": (c.c_int, [vp, vp, c.c_char_p, c.POINTER(FitOptions), c.POINTER(WriteOptions),
+                                        PROGRESS_FN, vp, c.POINTER(vp)]),
+            "ndfb_bake_result_destroy": (None, [vp]),
+            "ndfb_bake_result_level_count": (c.c_uint32, [vp]),
+            "ndfb_bake_result_level_size": (c.c_int, [vp, c.c_uint32, c.POINTER(c.c_uint32), c.POINTER(c.c_uint32)]),
+            "ndfb_bake_result_lobe_slots": (c.c_uint32, [vp]),
+            "ndfb_bake_result_slots_used": (c.c_int, [vp, c.POINTER(c.c_uint8), c.c_size_t]),
+            "ndfb_bake_result_atlas_size": (c.c_int, [vp, c.POINTER(c.c_uint32), c.POINTER(c.c_uint32)]),
+            "ndfb_bake_result_atlas_frame": (c.c_int, [vp, c.c_uint32, c.POINTER(AtlasFrame)]),
+            "ndfb_bake_result_file_count": (c.c_uint32, [vp]),
+            "ndfb_bake_result_file": (c.c_int, [vp, c.c_uint32, c.POINTER(BakeFile)]),
+            "ndfb_is_bake_file": (c.c_int32, [c.c_char_p]),
             "ndfb_synthesize": (c.c_int, [vp, c.c_char_p, c.c_uint32, c.c_uint32, c.c_uint32, c.POINTER(vp)]),
             "ndfb_normal_map_save": (c.c_int, [vp, vp, c.c_char_p]),
             "ndfb_normal_map_destroy": (None, [vp]),
@@ -150,6 +173,10 @@ class Library:
         options = struct.from_buffer_copy(scratch, 0)
         options.struct_size = min(options.struct_size, ctypes.sizeof(struct))
         return options
+
+    def is_bake_file(self, name):
+        """Whether `name` (no folder) is one of the files a bake writes (ndfb_is_bake_file)."""
+        return bool(self.lib.ndfb_is_bake_file(name.encode("utf-8", "surrogateescape")))
 
     def status_name(self, status):
         name = self.lib.ndfb_status_name(status)
@@ -241,17 +268,12 @@ class Context:
                                                    ctypes.byref(decode), ctypes.byref(handle)))
         return NormalMap(self, handle)
 
-    def bake(self, normal_map, out_dir, *, source_name=None, max_lobes=None, tolerance=0.0, roughness=0.5,
-             wrap=WRAP_REPEAT, refine=False, threads=0, progress=None, max_levels=0, atlas=False,
-             mipmap=False):
-        """ndfb_bake_map with a GGX base BRDF of Blender roughness `roughness`; `source_name` is what
-        the files and report.json record as the map's origin (None: the library's "memory");
-        max_lobes None: the library's default (ndfb_fit_options_init).
-
-        progress(stage, fraction) -> bool: return True to cancel. Exceptions inside it cancel too.
-        Raises Error on failure (status ERROR_CANCELLED when progress asked to stop)."""
-        lib = self.lib.lib
-        fit = Library.init_options(FitOptions, lib.ndfb_fit_options_init)
+    def fit_options(self, *, max_lobes=None, tolerance=0.0, roughness=0.5, wrap=WRAP_REPEAT, refine=False,
+                    threads=0, max_levels=0):
+        """ndfb_fit_options with a GGX base BRDF of Blender roughness `roughness`, checked by the library
+        (ndfb_fit_options_check: raises Error naming the bad field); max_lobes None: the library's
+        default."""
+        fit = Library.init_options(FitOptions, self.lib.lib.ndfb_fit_options_init)
         if max_lobes is not None:
             fit.max_lobes = int(max_lobes)
         fit.tolerance = float(tolerance)
@@ -261,23 +283,36 @@ class Context:
         fit.threads = int(threads)
         fit.max_levels = int(max_levels)
         fit.refine = 1 if refine else 0
-        callback = None
-        if progress is not None:
-            def trampoline(_user, stage, fraction):
-                try:
-                    return 1 if progress(stage.decode() if stage else "", float(fraction)) else 0
-                except BaseException:  # never let an exception unwind through C: cancel instead
-                    return 1
-            callback = PROGRESS_FN(trampoline)  # kept alive by this frame for the whole call
-            fit.progress = callback
+        self.check(self.lib.lib.ndfb_fit_options_check(self.handle, ctypes.byref(fit)))
+        return fit
+
+    def bake(self, normal_map, out_dir, fit, *, source_name=None, progress=None, atlas=False, mipmap=False):
+        """ndfb_bake_map with `fit` (fit_options()); `source_name` is what the files and report.json
+        record as the map's origin (None: the library's "memory"). Returns what it wrote, a
+        bake_output.BakeOutput.
+
+        progress(stage, fraction) -> bool: return True to cancel. Exceptions inside it cancel too.
+        Raises Error on failure (status ERROR_CANCELLED when progress asked to stop)."""
+        lib = self.lib.lib
+
+        def trampoline(_user, stage, fraction):
+            try:
+                return 1 if progress(stage.decode() if stage else "", float(fraction)) else 0
+            except BaseException:  # never let an exception unwind through C: cancel instead
+                return 1
+        callback = PROGRESS_FN(trampoline) if progress is not None else PROGRESS_FN()  # alive for the call
         write = Library.init_options(WriteOptions, lib.ndfb_write_options_init)
         name = _encode(source_name) if source_name else None  # kept alive by this frame for the call
         write.source_name = name
         write.atlas = 1 if atlas else 0
         write.mipmap = 1 if mipmap else 0
+        result = ctypes.c_void_p()
         self.check(lib.ndfb_bake_map(self.handle, normal_map.handle, _encode(out_dir), ctypes.byref(fit),
-                                     ctypes.byref(write)))
-        del callback
+                                     ctypes.byref(write), callback, None, ctypes.byref(result)))
+        try:
+            return bake_output.read(lib, result)
+        finally:
+            lib.ndfb_bake_result_destroy(result)
 
     def texel_density(self, positions, face_sizes, corner_vertices, vertex_normals, corner_uvs):
         """ndfb_texel_density over a whole mesh: UV units per world unit, sqrt(UV area / world

@@ -2,9 +2,11 @@
 enums and option structures, for native.py's calls. No bpy; nothing is loaded here."""
 import ctypes
 
-# The ABI this module's structures and signatures are written against (ndfb_abi_version()).
-ABI_VERSION = 1
-MAX_LOBES = 8  # NDFB_MAX_LOBES
+# The ABI this module's structures and signatures are written against: the library's major
+# (ndfb_abi_version()) must be ABI_MAJOR, its minor (ndfb_abi_minor()) at least ABI_MINOR. Limits
+# and defaults are the library's (native.Library.max_lobes, ndfb_fit_options_init).
+ABI_MAJOR = 2
+ABI_MINOR = 0
 
 # ndfb_status
 OK = 0
@@ -23,6 +25,8 @@ WRAP_REPEAT, WRAP_CLAMP = 0, 1
 BRDF_GGX, BRDF_BLINN_PHONG, BRDF_LAMBERT, BRDF_BECKMANN = 0, 1, 2, 3
 PRECISION_HALF, PRECISION_FLOAT = 0, 1
 FIT_PER_LEVEL, FIT_HIERARCHICAL = 0, 1
+# ndfb_file_kind: what each file of a bake holds
+FILE_LOBE, FILE_COLOR, FILE_ATLAS, FILE_MIP, FILE_SHADER, FILE_REPORT = 0, 1, 2, 3, 4, 5
 
 PROGRESS_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_float)
 
@@ -49,8 +53,6 @@ class FitOptions(ctypes.Structure):
         ("max_iterations", ctypes.c_uint32),
         ("method", ctypes.c_int),
         ("threads", ctypes.c_uint32),
-        ("progress", PROGRESS_FN),
-        ("progress_user", ctypes.c_void_p),
         ("max_memory_bytes", ctypes.c_uint64),
         ("max_levels", ctypes.c_uint32),
         ("starts", ctypes.c_uint32),
@@ -66,6 +68,24 @@ class WriteOptions(ctypes.Structure):
         ("source_name", ctypes.c_char_p),
         ("atlas", ctypes.c_int32),
         ("mipmap", ctypes.c_int32),
+    ]
+
+
+class BakeFile(ctypes.Structure):
+    _fields_ = [
+        ("kind", ctypes.c_int),
+        ("level", ctypes.c_int32),
+        ("slot", ctypes.c_int32),
+        ("name", ctypes.c_char_p),
+    ]
+
+
+class AtlasFrame(ctypes.Structure):
+    _fields_ = [
+        ("x", ctypes.c_uint32),
+        ("y", ctypes.c_uint32),
+        ("width", ctypes.c_uint32),
+        ("height", ctypes.c_uint32),
     ]
 
 

@@ -39,7 +39,6 @@ TEXT_NAME = "ndfbake_lobes.osl"   # the internal text datablock the Script node 
 SCRIPT_NODE = "Lobes (OSL)"
 FRAME_NODE = "Tangent Frame"      # the live Normal Map node that makes Cycles provide the UV map's tangent
 UV_NODE = "OSL UV"
-MIP_FILE = "mip_lobe%d.exr"
 # Principled layers the shader does not draw: a material where one may matter keeps the stock group.
 UNSUPPORTED_INPUTS = specular_split.LAYERED_INPUTS + ("Subsurface Weight", "Thin Film Thickness")
 

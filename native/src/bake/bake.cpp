@@ -38,12 +38,6 @@ void check_progress(const StageProgress& progress, const char* stage, double fra
     if (progress && !progress(stage, fraction)) throw Error(Status::cancelled, "cancelled");
 }
 
-bool is_bake_file(const std::string& name)
-{
-    static const std::regex pattern(R"(level\d+_(lobe|color)\d+\.exr|(atlas|mip)_lobe\d+\.exr)");
-    return name == kLobeShaderFileName || std::regex_match(name, pattern);
-}
-
 fs::path make_staging_dir(const std::string& out_dir)
 {
     static std::atomic<unsigned> counter{0};
@@ -68,6 +62,12 @@ void require_color_size(const std::string& color_path, int width, int height, in
 }
 
 }  // namespace
+
+bool is_bake_file(const std::string& name)
+{
+    static const std::regex pattern(R"(level\d+_(lobe|color)\d+\.exr|(atlas|mip)_lobe\d+\.exr)");
+    return name == kLobeShaderFileName || name == kReportFileName || std::regex_match(name, pattern);
+}
 
 BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& decoded, const std::string& out_dir,
                                const PyramidSettings& settings, const WriteSettings& write, BakeTimings timings,
@@ -97,18 +97,20 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
         // One job per file, on every core: compressing the level-0 textures is most of the cost.
         // Jobs [0, lobe_jobs) are the (level, slot) textures, level 0 first so that the largest
         // files start together; then one atlas per slot, then one MIP file per slot.
-        std::vector<std::string> names;
+        std::vector<BakeFile> files;
         for (int level = 0; level < pyramid.level_count(); ++level)
-            for (int lobe = 0; lobe < pyramid.slots; ++lobe) names.push_back(lobe_file_name(level, lobe));
-        const int lobe_jobs = int(names.size());
+            for (int lobe = 0; lobe < pyramid.slots; ++lobe)
+                files.push_back({BakeFileKind::lobe, level, lobe, lobe_file_name(level, lobe)});
+        const int lobe_jobs = int(files.size());
         if (write.atlas)
-            for (int lobe = 0; lobe < pyramid.slots; ++lobe) names.push_back(atlas_file_name(lobe));
-        const int atlas_jobs = int(names.size()) - lobe_jobs;
+            for (int lobe = 0; lobe < pyramid.slots; ++lobe)
+                files.push_back({BakeFileKind::atlas, -1, lobe, atlas_file_name(lobe)});
+        const int atlas_jobs = int(files.size()) - lobe_jobs;
         if (write.mipmap)
-            for (int lobe = 0; lobe < pyramid.slots; ++lobe) names.push_back(mip_file_name(lobe));
+            for (int lobe = 0; lobe < pyramid.slots; ++lobe) files.push_back({BakeFileKind::mip, -1, lobe, mip_file_name(lobe)});
         const AtlasLayout layout = pyramid_atlas_layout(pyramid);
-        parallel_rows(int(names.size()), settings.threads, [&](int job) {
-            const std::string path = file_in(staging, names[size_t(job)]);
+        parallel_rows(int(files.size()), settings.threads, [&](int job) {
+            const std::string path = file_in(staging, files[size_t(job)].name);
             if (job >= lobe_jobs + atlas_jobs) {
                 write_mip_file(pyramid, decoded, settings, write, stats, job - lobe_jobs - atlas_jobs, path);
                 return;
@@ -130,8 +132,8 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
                 const LevelSize size = pyramid.size(level);
                 const auto textures = color_textures(pyramid, color, level);
                 for (int lobe = 0; lobe < pyramid.slots; ++lobe) {
-                    names.push_back(color_file_name(level, lobe));
-                    write_rgba_exr(file_in(staging, names.back()), size.width, size.height,
+                    files.push_back({BakeFileKind::color, level, lobe, color_file_name(level, lobe)});
+                    write_rgba_exr(file_in(staging, files.back().name), size.width, size.height,
                                    textures[size_t(lobe)].data(), write.precision,
                                    file_attributes(pyramid, decoded, settings, write, level, lobe,
                                                    stats[size_t(level)].fit.mean,
@@ -139,17 +141,20 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
                 }
             }
         }
-        names.push_back(kLobeShaderFileName);
-        write_text_atomic(file_in(staging, names.back()), lobe_shader_glsl(pyramid.slots, write.precision));
+        files.push_back({BakeFileKind::shader, -1, -1, kLobeShaderFileName});
+        write_text_atomic(file_in(staging, files.back().name), lobe_shader_glsl(pyramid.slots, write.precision));
+        std::vector<std::string> names;
+        for (const BakeFile& file : files) names.push_back(file.name);
         timings.write = seconds_since(start);
-        write_text_atomic(file_in(staging, "report.json"),
+        write_text_atomic(file_in(staging, kReportFileName),
                           report_json(pyramid, decoded, settings, write, stats, timings, names));
         check_progress(progress, "write", 1.0);
 
         // Commit: only renames within one folder, all or nothing (commit_files): an earlier bake's
         // files that this one does not write go, and if any file cannot be moved (on Windows: one
         // open in another program) the folder keeps the earlier bake whole.
-        names.push_back("report.json");
+        files.push_back({BakeFileKind::report, -1, -1, kReportFileName});
+        names.push_back(kReportFileName);
         const std::set<std::string> fresh(names.begin(), names.end());
         std::vector<std::string> retired;
         for (const auto& entry : fs::directory_iterator(path_from_utf8(out_dir))) {
@@ -157,7 +162,11 @@ BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& d
             if (is_bake_file(name) && !fresh.count(name)) retired.push_back(name);
         }
         commit_files(path_to_utf8(staging), out_dir, names, retired);
-        for (const std::string& name : names) outcome.files.push_back(file_in(path_from_utf8(out_dir), name));
+        for (int level = 0; level < pyramid.level_count(); ++level) outcome.levels.push_back(pyramid.size(level));
+        outcome.slots = pyramid.slots;
+        outcome.slots_used = pyramid.slots_used();
+        if (write.atlas) outcome.atlas = layout;
+        outcome.files = std::move(files);
         std::error_code ignored;
         fs::remove_all(staging, ignored);  // empty now; one left behind is not a failed bake
     } catch (const fs::filesystem_error& e) {

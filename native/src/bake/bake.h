@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "bake/lobe_atlas.h"
 #include "bake/write_settings.h"
 #include "io/lobe_exr.h"
 #include "io/normal_decode.h"
@@ -20,10 +21,30 @@ struct BakeTimings {
     double decode = 0.0, fit = 0.0, measure = 0.0, write = 0.0;  // seconds
 };
 
+enum class BakeFileKind { lobe, color, atlas, mip, shader, report };
+
+// One file a bake wrote: its kind, the level and slot it holds (-1: not one level's or slot's)
+// and its name in the bake's folder.
+struct BakeFile {
+    BakeFileKind kind = BakeFileKind::lobe;
+    int level = -1;
+    int slot = -1;
+    std::string name;
+};
+
+// What a bake wrote: its levels and slots, the slots any texel uses, the atlas layout (empty where
+// no atlas was written) and its files, report.json last.
 struct BakeOutcome {
-    std::vector<std::string> files;  // final paths, report.json last
+    std::vector<LevelSize> levels;
+    int slots = 0;
+    std::vector<bool> slots_used;
+    AtlasLayout atlas;
+    std::vector<BakeFile> files;
     BakeTimings timings;
 };
+
+// Whether `name` (no folder) is one of the files a bake writes.
+bool is_bake_file(const std::string& name);
 
 // The texels of slot `slot` of a level as its lobe texture stores them: R = α, GBA = α·r, with
 // |r| the mean resultant length of the lobe's κ (1 at the κ cap).

@@ -24,6 +24,15 @@ ErrorSummary summarize(std::vector<float> errors)
 
 }  // namespace
 
+std::vector<uint64_t> lobe_histogram(const LobePyramid& pyramid, int level)
+{
+    const LevelSize size = pyramid.size(level);
+    std::vector<uint64_t> histogram(size_t(pyramid.slots) + 1, 0);
+    for (int y = 0; y < size.height; ++y)
+        for (int x = 0; x < size.width; ++x) ++histogram[size_t(pyramid.lobe_count(level, x, y))];
+    return histogram;
+}
+
 void texel_reference_samples(const NormalMap& map, WrapMode wrap, int level, int x, int y, int sample_cap,
                              std::vector<WeightedNormal>& out)
 {
@@ -40,8 +49,7 @@ LevelStats measure_level(const LobePyramid& pyramid, int level, const BaseBrdf& 
     stats.level = level;
     stats.size = pyramid.size(level);
     const int64_t texels = int64_t(stats.size.width) * stats.size.height;
-    for (int64_t t = 0; t < texels; ++t)
-        ++stats.lobe_histogram[size_t(pyramid.lobe_count(level, int(t % stats.size.width), int(t / stats.size.width)))];
+    stats.lobe_histogram = lobe_histogram(pyramid, level);
 
     const std::vector<Vec3> directions = fibonacci_hemisphere(error_direction_count(brdf));
     const int64_t measured = max_texels > 0 ? std::min<int64_t>(max_texels, texels) : texels;

@@ -2,7 +2,6 @@
 // baselines and the cost of alignment, measured on an even sample of texels.
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -26,7 +25,7 @@ struct ErrorSummary {
 struct LevelStats {
     int level = 0;
     LevelSize size;
-    std::array<uint64_t, kMaxLobes + 1> lobe_histogram{};  // over every texel of the level
+    std::vector<uint64_t> lobe_histogram;  // texels with k lobes, k = 0..slots, over the whole level
     int measured_texels = 0;
     ErrorSummary fit;                // the pyramid's (aligned) lobes
     // The same budget without alignment, for alignment's cost: measured only when asked for
@@ -36,6 +35,9 @@ struct LevelStats {
     ErrorSummary single_vmf;
     ErrorSummary toksvig;
 };
+
+// How many texels of a level have k lobes, for k = 0..pyramid.slots.
+std::vector<uint64_t> lobe_histogram(const LobePyramid& pyramid, int level);
 
 // The exact-reference samples of one texel: its footprint, subsampled to `sample_cap` (0: all).
 void texel_reference_samples(const NormalMap& map, WrapMode wrap, int level, int x, int y, int sample_cap,

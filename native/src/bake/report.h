@@ -11,6 +11,8 @@
 
 namespace ndfbake {
 
+inline constexpr const char* kReportFileName = "report.json";
+
 // The report's text; `files` are the bake's files (paths or names) other than report.json.
 std::string report_json(const LobePyramid& pyramid, const DecodeResult& decoded, const PyramidSettings& settings,
                         const WriteSettings& write, const std::vector<LevelStats>& stats,

@@ -2,8 +2,8 @@
 // status codes plus last-error text. No exception crosses its functions. This file owns the entry
 // points about the library and its contexts (version, ABI, contexts, last error, status names);
 // the others, by object: capi/options.cpp, capi/map_exports.cpp, capi/pyramid_exports.cpp,
-// capi/bake_exports.cpp, capi/tangent_exports.cpp, capi/bench_exports.cpp. Calls capi/context.h
-// and io/image_files.h.
+// capi/bake_exports.cpp, capi/bake_result_exports.cpp, capi/tangent_exports.cpp,
+// capi/research_exports.cpp. Calls capi/context.h, io/image_files.h and ndf/spherical_em.h (the lobe limit).
 #include "ndfbake.h"
 
 #include <new>
@@ -11,6 +11,7 @@
 
 #include "capi/context.h"
 #include "io/image_files.h"
+#include "ndf/spherical_em.h"
 
 namespace {
 
@@ -23,7 +24,9 @@ thread_local std::string g_create_error;
 extern "C" {
 
 NDFB_API const char* ndfb_version(void) { return NDFBAKE_VERSION_STRING; }
-NDFB_API uint32_t ndfb_abi_version(void) { return NDFB_ABI_VERSION; }
+NDFB_API uint32_t ndfb_abi_version(void) { return NDFB_ABI_MAJOR; }
+NDFB_API uint32_t ndfb_abi_minor(void) { return NDFB_ABI_MINOR; }
+NDFB_API uint32_t ndfb_max_lobes(void) { return uint32_t(kMaxLobes); }
 
 NDFB_API int32_t ndfb_has_image_files(void) { return reads_image_files() ? 1 : 0; }
 

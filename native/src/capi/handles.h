@@ -1,5 +1,5 @@
-// What the C API's object files share beyond capi/context.h: the structs behind ndfb_normal_map
-// and ndfb_pyramid, the option structs' translation into the core's settings (defined in
+// What the C API's object files share beyond capi/context.h: the structs behind ndfb_normal_map,
+// ndfb_pyramid and ndfb_bake_result, the option structs' translation into the core's settings (defined in
 // capi/options.cpp) and the pyramid argument checks. Internal to capi/; calls nothing but the
 // core's headers.
 #pragma once
@@ -19,6 +19,10 @@ struct ndfb_pyramid_s {
     ndfbake::LobePyramid pyramid;
 };
 
+struct ndfb_bake_result_s {
+    ndfbake::BakeOutcome outcome;
+};
+
 namespace ndfbake {
 
 // Each option struct as the core's settings, its fields checked (NDFB_ERROR_INVALID_ARGUMENT).
@@ -31,8 +35,8 @@ WriteSettings to_write(const ndfb_write_options* o);
 // The write settings for a map from memory: its files name "memory" as their source where the
 // caller names none (ndfb_bake names the input file instead).
 WriteSettings to_memory_write(const ndfb_write_options* o);
-// The fit options' progress callback (none where it is null).
-StageProgress to_progress(const ndfb_fit_options* o);
+// A call's progress callback as the core's (none where it is null).
+StageProgress to_progress(ndfb_progress_fn progress, void* user);
 
 inline const LobePyramid& pyramid_of(ndfb_pyramid p)
 {

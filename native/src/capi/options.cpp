@@ -10,12 +10,12 @@ namespace ndfbake {
 
 namespace {
 
-// What each option struct held when ABI 1 first shipped (require_struct_size): ndfb_decode_options
-// has never grown; ndfb_fit_options ended at progress_user (max_memory_bytes, max_levels, starts
-// and refine came later), ndfb_write_options at source_name (atlas and mipmap came later).
+// What each option struct held in minor version 0 of ABI 2 (require_struct_size): every field so
+// far. A field a later minor version adds is read only where struct_size covers it
+// (NDFB_SIZE_THROUGH).
 constexpr size_t kDecodeOptionsFirstSize = sizeof(ndfb_decode_options);
-constexpr size_t kFitOptionsFirstSize = NDFB_SIZE_THROUGH(ndfb_fit_options, progress_user);
-constexpr size_t kWriteOptionsFirstSize = NDFB_SIZE_THROUGH(ndfb_write_options, source_name);
+constexpr size_t kFitOptionsFirstSize = sizeof(ndfb_fit_options);
+constexpr size_t kWriteOptionsFirstSize = sizeof(ndfb_write_options);
 
 }  // namespace
 
@@ -56,8 +56,8 @@ WrapMode to_wrap(int wrap)
 PyramidSettings to_pyramid(const ndfb_fit_options* o)
 {
     require_struct_size(o, "fit options", kFitOptionsFirstSize, "ndfb_fit_options_init");
-    require(o->max_lobes >= 1 && o->max_lobes <= NDFB_MAX_LOBES,
-            "max_lobes must be in 1.." + std::to_string(NDFB_MAX_LOBES) + ", got " + std::to_string(o->max_lobes));
+    require(o->max_lobes >= 1 && o->max_lobes <= uint32_t(kMaxLobes),
+            "max_lobes must be in 1.." + std::to_string(kMaxLobes) + ", got " + std::to_string(o->max_lobes));
     require(o->tolerance >= 0.0f && o->tolerance <= 1.0f,
             "tolerance must be in [0, 1], got " + std::to_string(o->tolerance));
     require(o->alignment_strength >= 0.0f && o->alignment_strength <= 10.0f,
@@ -77,18 +77,12 @@ PyramidSettings to_pyramid(const ndfb_fit_options* o)
     s.alignment_strength = o->alignment_strength;
     s.threads = int(o->threads);
     s.method = method == NDFB_FIT_HIERARCHICAL ? FitMethod::hierarchical : FitMethod::per_level;
-    // Added after ABI 1's first release: read only from callers whose struct has them.
-    if (o->struct_size >= NDFB_SIZE_THROUGH(ndfb_fit_options, max_memory_bytes))
-        s.max_memory_bytes = o->max_memory_bytes;
-    if (o->struct_size >= NDFB_SIZE_THROUGH(ndfb_fit_options, max_levels)) {
-        require(o->max_levels <= 64, "max_levels must be at most 64 (0: every level), got " + std::to_string(o->max_levels));
-        s.max_levels = int(o->max_levels);
-    }
-    if (o->struct_size >= NDFB_SIZE_THROUGH(ndfb_fit_options, starts)) {
-        require(o->starts == 1 || o->starts == 2, "starts must be 1 or 2, got " + std::to_string(o->starts));
-        s.fit.two_starts = o->starts == 2;
-    }
-    if (o->struct_size >= NDFB_SIZE_THROUGH(ndfb_fit_options, refine)) s.refine = o->refine != 0;
+    s.max_memory_bytes = o->max_memory_bytes;
+    require(o->max_levels <= 64, "max_levels must be at most 64 (0: every level), got " + std::to_string(o->max_levels));
+    s.max_levels = int(o->max_levels);
+    require(o->starts == 1 || o->starts == 2, "starts must be 1 or 2, got " + std::to_string(o->starts));
+    s.fit.two_starts = o->starts == 2;
+    s.refine = o->refine != 0;
     return s;
 }
 
@@ -103,8 +97,8 @@ WriteSettings to_write(const ndfb_write_options* o)
     w.precision = precision == NDFB_PRECISION_FLOAT ? PixelPrecision::single : PixelPrecision::half;
     if (o->color_path) w.color_path = o->color_path;
     if (o->source_name) w.source_name = o->source_name;
-    if (o->struct_size >= NDFB_SIZE_THROUGH(ndfb_write_options, atlas)) w.atlas = o->atlas != 0;
-    if (o->struct_size >= NDFB_SIZE_THROUGH(ndfb_write_options, mipmap)) w.mipmap = o->mipmap != 0;
+    w.atlas = o->atlas != 0;
+    w.mipmap = o->mipmap != 0;
     return w;
 }
 
@@ -115,12 +109,10 @@ WriteSettings to_memory_write(const ndfb_write_options* o)
     return w;
 }
 
-StageProgress to_progress(const ndfb_fit_options* o)
+StageProgress to_progress(ndfb_progress_fn progress, void* user)
 {
-    if (!o || !o->progress) return {};
-    return [fn = o->progress, user = o->progress_user](const char* stage, double fraction) {
-        return fn(user, stage, float(fraction)) == 0;
-    };
+    if (!progress) return {};
+    return [progress, user](const char* stage, double fraction) { return progress(user, stage, float(fraction)) == 0; };
 }
 
 }  // namespace ndfbake
@@ -157,6 +149,14 @@ NDFB_API void ndfb_fit_options_init(ndfb_fit_options* o)
     o->threads = 0;
     o->starts = d.fit.two_starts ? 2 : 1;
     o->refine = d.refine ? 1 : 0;
+}
+
+NDFB_API ndfb_status ndfb_fit_options_check(ndfb_context ctx, const ndfb_fit_options* options)
+{
+    return guarded(ctx, [&] {
+        require(ctx, "ndfb_fit_options_check: ctx must not be null");
+        to_pyramid(options);
+    });
 }
 
 NDFB_API void ndfb_write_options_init(ndfb_write_options* o)

@@ -1,5 +1,5 @@
 // C entry points of fitting and lobe pyramids (ndfb_pyramid): the fit, the pyramid's levels and
-// lobe textures, and the error measures (per level, per texel, the reference effective BRDF).
+// lobe textures, and the per-level error measure (the per-texel ones: research_exports.cpp).
 // Calls capi/handles.h, bake/ (memory budget, level statistics, lobe textures), ndf/ and math/.
 #include <algorithm>
 #include <cstddef>
@@ -19,13 +19,14 @@ using namespace ndfbake;
 
 extern "C" {
 
-NDFB_API ndfb_status ndfb_fit(ndfb_context ctx, ndfb_normal_map map, const ndfb_fit_options* options, ndfb_pyramid* out)
+NDFB_API ndfb_status ndfb_fit(ndfb_context ctx, ndfb_normal_map map, const ndfb_fit_options* options,
+                              ndfb_progress_fn progress_fn, void* progress_user, ndfb_pyramid* out)
 {
     if (out) *out = nullptr;  // before any check: NULL after every failure (ndfbake.h)
     return guarded(ctx, [&] {
         require(ctx && map && out, "ndfb_fit: ctx, map and out must not be null");
         const PyramidSettings settings = to_pyramid(options);
-        const StageProgress progress = to_progress(options);
+        const StageProgress progress = to_progress(progress_fn, progress_user);
         const NormalMap& m = map->decoded.map;
         check_memory_budget(estimate_bake_memory(m.width, m.height, SourceLayout{}, settings, WriteSettings{}),
                             settings.max_memory_bytes, m.width, m.height, settings.fit.max_lobes, "cannot fit the map");
@@ -78,64 +79,19 @@ NDFB_API ndfb_status ndfb_pyramid_level_stats(ndfb_context ctx, ndfb_pyramid p, 
         *out = {};
         out->width = uint32_t(s.size.width);
         out->height = uint32_t(s.size.height);
-        for (int k = 0; k <= NDFB_MAX_LOBES; ++k) out->lobe_histogram[k] = s.lobe_histogram[size_t(k)];
         out->mean_error = s.fit.mean;
         out->p95_error = s.fit.p95;
         out->measured_texels = uint32_t(s.measured_texels);
     });
 }
 
-NDFB_API ndfb_status ndfb_effective_brdf_reference(ndfb_context ctx, ndfb_normal_map map, ndfb_wrap wrap,
-                                                   uint32_t level, uint32_t x, uint32_t y, ndfb_brdf brdf,
-                                                   float brdf_parameter, const float* directions,
-                                                   size_t direction_count, float* values)
+NDFB_API ndfb_status ndfb_pyramid_lobe_histogram(ndfb_pyramid p, uint32_t level, uint64_t* counts, size_t count)
 {
-    return guarded(ctx, [&] {
-        require(ctx && map && directions && values, "ndfb_effective_brdf_reference: null argument");
-        const NormalMap& m = map->decoded.map;
-        require(level < uint32_t(level_count(m.width, m.height)), "level " + std::to_string(level) + " does not exist");
-        const LevelSize size = level_size(m.width, m.height, int(level));
-        require(x < uint32_t(size.width) && y < uint32_t(size.height), "texel outside the level");
-        std::vector<Vec3> dirs(direction_count);
-        for (size_t i = 0; i < direction_count; ++i)
-            dirs[i] = normalize_or({directions[3 * i], directions[3 * i + 1], directions[3 * i + 2]}, {0, 0, 1});
-        std::vector<WeightedNormal> samples;
-        gather_footprint(m, int(level), int(x), int(y), to_wrap(raw(wrap)), samples);
-        reference_effective_brdf(samples, to_brdf(raw(brdf), brdf_parameter), dirs, std::span(values, direction_count));
-    });
-}
-
-NDFB_API ndfb_status ndfb_texel_error(ndfb_context ctx, ndfb_normal_map map, ndfb_pyramid p,
-                                      ndfb_representation representation, ndfb_wrap wrap, uint32_t level, uint32_t x,
-                                      uint32_t y, ndfb_brdf brdf, float brdf_parameter, float* error)
-{
-    return guarded(ctx, [&] {
-        require(ctx && map && error, "ndfb_texel_error: ctx, map and error must not be null");
-        const NormalMap& m = map->decoded.map;
-        require(level < uint32_t(level_count(m.width, m.height)), "level " + std::to_string(level) + " does not exist");
-        const LevelSize size = level_size(m.width, m.height, int(level));
-        require(x < uint32_t(size.width) && y < uint32_t(size.height), "texel outside the level");
-        const BaseBrdf base = to_brdf(raw(brdf), brdf_parameter);
-        std::vector<WeightedNormal> samples;
-        gather_footprint(m, int(level), int(x), int(y), to_wrap(raw(wrap)), samples);
-        const std::vector<Vec3> directions = fibonacci_hemisphere(error_direction_count(base));
-        const TexelErrorMeter meter(samples, base, directions);
-        std::vector<VmfLobe> lobes;
-        switch (raw(representation)) {
-        case NDFB_REPR_VMF_MIXTURE: {
-            const LobePyramid& pyramid = pyramid_of(p);
-            require(pyramid.source.width == m.width && pyramid.source.height == m.height,
-                    "the pyramid was fitted to a map of another size");
-            require_level(pyramid, level);
-            lobes = pyramid.texel_lobes(int(level), int(x), int(y));
-            break;
-        }
-        case NDFB_REPR_SINGLE_VMF: lobes = {single_vmf_lobe(samples)}; break;
-        case NDFB_REPR_TOKSVIG: lobes = {toksvig_lobe(samples)}; break;
-        default: throw Error(Status::invalid_argument, "unknown representation");
-        }
-        *error = meter.error(lobes);
-    });
+    if (!p || !counts || level >= uint32_t(p->pyramid.level_count()) || count != size_t(p->pyramid.slots) + 1)
+        return NDFB_ERROR_INVALID_ARGUMENT;
+    const std::vector<uint64_t> histogram = lobe_histogram(p->pyramid, int(level));
+    std::copy(histogram.begin(), histogram.end(), counts);
+    return NDFB_OK;
 }
 
 }  // extern "C"

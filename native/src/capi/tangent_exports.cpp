@@ -82,16 +82,13 @@ SpaceSettings to_space(const ndfb_space_options* o)
 {
     SpaceSettings s;
     if (!o) return s;
-    require_struct_size(o, "space options", NDFB_SIZE_THROUGH(ndfb_space_options, threads),
-                        "ndfb_space_options_init");
+    require_struct_size(o, "space options", sizeof(ndfb_space_options), "ndfb_space_options_init");
     s.padding = o->padding;
     s.threads = to_threads(o->threads);
-    if (o->struct_size >= NDFB_SIZE_THROUGH(ndfb_space_options, frame_normal)) {
-        require(o->frame_normal == NDFB_FRAME_NORMAL_INTERPOLATED || o->frame_normal == NDFB_FRAME_NORMAL_UNIT,
-                "space options frame_normal must be NDFB_FRAME_NORMAL_INTERPOLATED (0) or NDFB_FRAME_NORMAL_UNIT "
-                "(1), got " + std::to_string(o->frame_normal));
-        s.unit_normal = o->frame_normal == NDFB_FRAME_NORMAL_UNIT;
-    }
+    require(o->frame_normal == NDFB_FRAME_NORMAL_INTERPOLATED || o->frame_normal == NDFB_FRAME_NORMAL_UNIT,
+            "space options frame_normal must be NDFB_FRAME_NORMAL_INTERPOLATED (0) or NDFB_FRAME_NORMAL_UNIT "
+            "(1), got " + std::to_string(o->frame_normal));
+    s.unit_normal = o->frame_normal == NDFB_FRAME_NORMAL_UNIT;
     return s;
 }
 
