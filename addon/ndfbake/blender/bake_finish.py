@@ -150,6 +150,8 @@ def finish(job):
     if job.lod is not None:
         width, height = output.atlas_size
         atlas = lod_nodes.AtlasLayout(width=width, height=height, levels=output.atlas_frames)
+    mip_files = {j: os.path.join(job.out_dir, name) for j, name in output.slot_files(native_abi.FILE_MIP).items()
+                 if output.slots_used[j]}
 
     old = bake_record.record(material) or {}
     # The group nodes of the previous bake, by the Principled BSDF they stand for: replaced in place.
@@ -178,7 +180,7 @@ def finish(job):
             if job.settings.shader == "OSL":
                 groups.append(osl_group.build_material_group(
                     nodes.material_group_name(material.name), tree.nodes[principled_name],
-                    tree.nodes[normal_map_name], tree.nodes[texture_name], images, job.out_dir, slots, atlas,
+                    tree.nodes[normal_map_name], tree.nodes[texture_name], images, mip_files, atlas,
                     job.lod, current=current, cycles_lobes=job.settings.cycles_lobes,
                     narrowing=job.settings.grazing_narrowing))
                 continue

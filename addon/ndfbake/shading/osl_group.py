@@ -39,6 +39,7 @@ TEXT_NAME = "ndfbake_lobes.osl"   # the internal text datablock the Script node 
 SCRIPT_NODE = "Lobes (OSL)"
 FRAME_NODE = "Tangent Frame"      # the live Normal Map node that makes Cycles provide the UV map's tangent
 UV_NODE = "OSL UV"
+LOBE_INPUT = "Lobe%d"  # the Script node's input for a slot's MIP-mapped file ("" : a slot not drawn)
 # Principled layers the shader does not draw: a material where one may matter keeps the stock group.
 UNSUPPORTED_INPUTS = specular_split.LAYERED_INPUTS + ("Subsurface Weight", "Thin Film Thickness")
 
@@ -164,12 +165,13 @@ def compile_script(node):
     return bool(ok) and set(p.name for p in node.outputs) >= {"BSDF"}, messages
 
 
-def build_material_group(name, principled, normal_map, image_texture, lobe_images, folder, slots, atlas=None, lod=None,
+def build_material_group(name, principled, normal_map, image_texture, lobe_images, mip_files, atlas=None, lod=None,
                          current=None, cycles_lobes=nodes.NARROWED, narrowing=None):
     """The OSL variant of nodes.build_material_group: the same inputs and outputs; EEVEE BSDF as the
-    stock group's (narrowed lobes, from `lobe_images`), BSDF from the Script node reading
-    `folder`/mip_lobeJ.exr for each slot J in `slots`. Raises RuntimeError where the script does
-    not compile."""
+    stock group's (narrowed lobes, from `lobe_images`), BSDF from the Script node reading the
+    MIP-mapped file of each slot in `mip_files` ({slot: path}, as the library named them; a slot
+    left out is not drawn). Raises RuntimeError where the script does not compile or has no input
+    for a slot."""
     tree = nodes.build_material_group(name, principled, normal_map, image_texture, lobe_images, atlas, lod,
                                       current=current, cycles_lobes=None, narrowing=narrowing)
     gin = next(n for n in tree.nodes if n.bl_idname == "NodeGroupInput")
@@ -184,8 +186,11 @@ def build_material_group(name, principled, normal_map, image_texture, lobe_image
     if not ok:
         raise RuntimeError("the OSL lobe shader does not compile: %s" % "; ".join(messages))
     inputs = script.inputs
-    inputs["Folder"].default_value = bpy.path.abspath(folder)
-    inputs["SlotMask"].default_value = sum(1 << j for j in slots)
+    for slot, path in mip_files.items():
+        if LOBE_INPUT % slot not in inputs:
+            raise RuntimeError("the OSL lobe shader reads at most %d lobe slots, the bake has slot %d"
+                               % (len([i for i in inputs if i.name.startswith("Lobe")]), slot))
+        inputs[LOBE_INPUT % slot].default_value = bpy.path.abspath(path)
     inputs["Repeat"].default_value = 1 if image_texture.extension == "REPEAT" else 0
     inputs["UVMapName"].default_value = normal_map.uv_map
     inputs["Narrowing"].default_value = nodes.grazing_narrowing("BSDF", cycles_lobes, narrowing)
