@@ -145,8 +145,12 @@ TEST_F(BakeApi, TheResultNamesEveryFileTheBakeWroteAndNothingElse)
     EXPECT_EQ(ndfb_bake_result_slots_used(result, used.data(), used.size() + 1), NDFB_ERROR_INVALID_ARGUMENT);
     ndfb_bake_result_destroy(result);
 
-    for (const char* other : {"notes.txt", "level00_lobe0.exr.tmp", "Level00_lobe0.exr", "report.json.bak", ""})
+    for (const char* other : {"notes.txt", "level00_lobe0.exr.tmp", "Level00_lobe0.exr", "report.json.bak", "",
+                              "level_lobe0.exr", "level00_lobe.exr", "level00_colour0.exr", "mip_lobe1.EXR",
+                              "atlas_lobe0exr", "xlevel00_lobe0.exr"})
         EXPECT_EQ(ndfb_is_bake_file(other), 0) << other;
+    for (const char* name : {"level123_lobe7.exr", "level00_color10.exr", "mip_lobe0.exr", "atlas_lobe12.exr"})
+        EXPECT_EQ(ndfb_is_bake_file(name), 1) << name;
     EXPECT_EQ(ndfb_is_bake_file(nullptr), 0);
     EXPECT_EQ(ndfb_bake_result_file_count(nullptr), 0u);
 }

@@ -7,8 +7,8 @@
 #include <atomic>
 #include <chrono>
 #include <filesystem>
-#include <regex>
 #include <set>
+#include <string_view>
 
 #include "bake/level_stats.h"
 #include "bake/lobe_files.h"
@@ -63,10 +63,41 @@ void require_color_size(const std::string& color_path, int width, int height, in
 
 }  // namespace
 
-bool is_bake_file(const std::string& name)
+namespace {
+
+// Consumes `prefix` at `pos` of `name` if it is there.
+bool consume(std::string_view name, size_t& pos, std::string_view prefix)
 {
-    static const std::regex pattern(R"(level\d+_(lobe|color)\d+\.exr|(atlas|mip)_lobe\d+\.exr)");
-    return name == kLobeShaderFileName || name == kReportFileName || std::regex_match(name, pattern);
+    if (name.substr(pos, prefix.size()) != prefix) return false;
+    pos += prefix.size();
+    return true;
+}
+
+// Consumes one or more ASCII digits at `pos`.
+bool consume_digits(std::string_view name, size_t& pos)
+{
+    const size_t start = pos;
+    while (pos < name.size() && name[pos] >= '0' && name[pos] <= '9') ++pos;
+    return pos > start;
+}
+
+}  // namespace
+
+// The names lobe_file_name, color_file_name, atlas_file_name and mip_file_name write:
+// level<digits>_lobe<digits>.exr, level<digits>_color<digits>.exr, atlas_lobe<digits>.exr and
+// mip_lobe<digits>.exr, besides the shader and the report. Matched by hand, not with std::regex:
+// in Blender on Windows (under wine) the add-on library's std::regex matched these names only now
+// and then, and a reverted bake's folder stayed behind.
+bool is_bake_file(std::string_view name)
+{
+    if (name == kLobeShaderFileName || name == kReportFileName) return true;
+    size_t pos = 0;
+    if (consume(name, pos, "level")) {
+        if (!consume_digits(name, pos) || !(consume(name, pos, "_lobe") || consume(name, pos, "_color"))) return false;
+    } else if (!consume(name, pos, "atlas_lobe") && !consume(name, pos, "mip_lobe")) {
+        return false;
+    }
+    return consume_digits(name, pos) && name.substr(pos) == ".exr";
 }
 
 BakeOutcome write_pyramid_into(const LobePyramid& pyramid, const DecodeResult& decoded, const std::string& out_dir,

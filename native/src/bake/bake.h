@@ -4,6 +4,7 @@
 
 #include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "bake/lobe_atlas.h"
@@ -44,7 +45,7 @@ struct BakeOutcome {
 };
 
 // Whether `name` (no folder) is one of the files a bake writes.
-bool is_bake_file(const std::string& name);
+bool is_bake_file(std::string_view name);
 
 // The texels of slot `slot` of a level as its lobe texture stores them: R = α, GBA = α·r, with
 // |r| the mean resultant length of the lobe's κ (1 at the κ cap).

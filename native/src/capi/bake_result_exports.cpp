@@ -79,12 +79,7 @@ NDFB_API ndfb_status ndfb_bake_result_file(ndfb_bake_result r, uint32_t index, n
 
 NDFB_API int32_t ndfb_is_bake_file(const char* name)
 {
-    if (!name) return 0;
-    try {
-        return is_bake_file(name) ? 1 : 0;
-    } catch (...) {  // std::regex may throw (e.g. out of memory): not a bake file, and nothing crosses C
-        return 0;
-    }
+    return name && is_bake_file(name) ? 1 : 0;
 }
 
 }  // extern "C"
