@@ -140,18 +140,17 @@ def finish(job):
     lobe_folders.commit_pending(job)
     report = _read_report(job.out_dir)  # its error figures, for the summary
     output = job.output
-    # The cheapest group that does: slots no texel uses (a tolerance left them empty) are all zero.
+    # The cheapest group that does: only the slots that hold lobes.
     textures = output.lobe_textures(atlas=job.lod is not None)
-    slots = [j for j in sorted(textures) if output.slots_used[j]]
-    paths = [os.path.join(job.out_dir, textures[j]) for j in slots]
+    paths = [os.path.join(job.out_dir, textures[j]) for j in sorted(textures)]
     if not paths:
         raise BakeError("NATIVE_ERROR", "the bake wrote no lobe texture into %s" % job.out_dir)
     atlas = None
     if job.lod is not None:
         width, height = output.atlas_size
         atlas = lod_nodes.AtlasLayout(width=width, height=height, levels=output.atlas_frames)
-    mip_files = {j: os.path.join(job.out_dir, name) for j, name in output.slot_files(native_abi.FILE_MIP).items()
-                 if output.slots_used[j]}
+    mip_files = {j: os.path.join(job.out_dir, name)
+                 for j, name in output.used_slot_files(native_abi.FILE_MIP).items()}
 
     old = bake_record.record(material) or {}
     # The group nodes of the previous bake, by the Principled BSDF they stand for: replaced in place.

@@ -25,13 +25,15 @@ class BakeOutput:
     atlas_frames: list = field(default_factory=list)  # per level {"x", "y", "width", "height"}
     files: list = field(default_factory=list)         # WrittenFile, report.json last
 
-    def slot_files(self, kind, level=-1):
-        """{slot: name} of the files of `kind` (native_abi.FILE_*) at `level` (-1: of every level)."""
-        return {f.slot: f.name for f in self.files if f.kind == kind and f.level == level}
+    def used_slot_files(self, kind, level=-1):
+        """{slot: name} of the files of `kind` (native_abi.FILE_*) at `level` (-1: of every level), for
+        the slots that hold lobes: one no texel uses (a tolerance left it empty) is all zero."""
+        return {f.slot: f.name for f in self.files if f.kind == kind and f.level == level and self.slots_used[f.slot]}
 
     def lobe_textures(self, atlas):
-        """{slot: name} of what a node group samples: the atlas files, or level 0's lobe files."""
-        return self.slot_files(FILE_ATLAS) if atlas else self.slot_files(FILE_LOBE, level=0)
+        """{slot: name} of what a node group samples, used slots only: the atlas files, or level 0's
+        lobe files."""
+        return self.used_slot_files(FILE_ATLAS) if atlas else self.used_slot_files(FILE_LOBE, level=0)
 
 
 def read(lib, handle):
