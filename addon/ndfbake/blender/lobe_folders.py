@@ -40,6 +40,7 @@ from ..core.bake_job import BakeError
 from ..core.folder_names import (FOLDER_SUFFIX, PENDING_SUFFIX, delete_bake_files, folder_name, path_key,
                                  taken_on_disk)
 from ..shading import bake_record, material_scan
+from . import app_handlers
 
 # Bounds the search for a free folder: that many versions of one material on disk at once means
 # something else is wrong (a folder that cannot be deleted), and the user should hear of it.
@@ -292,19 +293,10 @@ def exit_session():
     hangs in its own exit (its sound thread's condition variable destroyed while waited on), 4.2
     crashes."""
     _close_session()
-    _remove_handler_functions()
+    app_handlers.remove(__name__, _HANDLERS)
 
 
 _HANDLERS = (("save_post", _on_save_post), ("load_pre", _on_load_pre), ("load_post", _on_load_post))
-
-
-def _remove_handler_functions():
-    """This module's handlers, also those of an earlier load of it (a reloaded add-on)."""
-    for name, handler in _HANDLERS:
-        handlers = getattr(bpy.app.handlers, name)
-        for old in [h for h in handlers if getattr(h, "__module__", None) == __name__
-                    and h.__name__ == handler.__name__]:
-            handlers.remove(old)
 
 
 def handlers_installed():
@@ -315,15 +307,13 @@ def install_handlers():
     """Called when the add-on is registered, or at a background session's first bake (created):
     from then on every save and the closing of the file (load, exit) keep the books. Importing
     installs nothing. A reloaded module replaces its earlier handlers."""
-    _remove_handler_functions()
+    app_handlers.install(__name__, _HANDLERS)
     atexit.unregister(exit_session)
-    for name, handler in _HANDLERS:
-        getattr(bpy.app.handlers, name).append(handler)
     atexit.register(exit_session)
 
 
 def remove_handlers():
     """For the add-on's unregister(): the handlers go and this session's folders are kept."""
-    _remove_handler_functions()
+    app_handlers.remove(__name__, _HANDLERS)
     atexit.unregister(exit_session)
     forget_session()

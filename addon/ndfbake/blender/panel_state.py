@@ -8,6 +8,7 @@ import bpy
 from bpy.app.handlers import persistent
 
 from ..shading import material_scan
+from . import app_handlers
 
 # material.as_pointer() -> (the material's name, its scan); the name guards against a new material
 # allocated where a deleted one was.
@@ -45,16 +46,11 @@ _HANDLERS = (("depsgraph_update_post", _on_depsgraph_update), ("undo_post", _on_
 
 
 def install_handlers():
-    remove_handlers()
-    for name, handler in _HANDLERS:
-        getattr(bpy.app.handlers, name).append(handler)
+    forget()
+    app_handlers.install(__name__, _HANDLERS)
 
 
 def remove_handlers():
     """Also those of an earlier load of this module (a reloaded add-on)."""
     forget()
-    for name, handler in _HANDLERS:
-        handlers = getattr(bpy.app.handlers, name)
-        for old in [h for h in handlers if getattr(h, "__module__", None) == __name__
-                    and h.__name__ == handler.__name__]:
-            handlers.remove(old)
+    app_handlers.remove(__name__, _HANDLERS)
